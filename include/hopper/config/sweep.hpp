@@ -1,0 +1,82 @@
+#pragma once
+// The sweep file (TOML) -> validated scene parameters and campaign spec, and the deterministic
+// task list. The only code that includes the TOML parser (toml++). Every bad value is rejected
+// with a core::ConfigError naming the file, the key, the value and the allowed range; unknown
+// keys are errors.
+//
+// File layout (all sections optional; defaults are the published values of spec/physics.md):
+//   [hopper]     width_cm particles small_fraction d_small_cm d_large_cm thickness_cm
+//                density_kg_m3 D_cm theta_deg
+//   [material]   e_n mu kt_over_kn youngs_modulus_pa poisson_ratio collision_time_s
+//   [walls]      e_n mu particle_diameter_cm spacing
+//   [integrator] scheme ("gear4" | "verlet") steps_per_collision skin
+//   [protocol]   see docs in README (jam detection, shaking, limits, sampling, guards)
+//   [campaign]   name store seed realizations
+//   [sweep]      D_cm = [..], theta_deg = [..], <section>.<key> = [..]  (Cartesian product)
+//   [[points]]   D_cm, theta_deg, <section> = { key = value }, realizations (optional)
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "hopper/engine/params.hpp"
+
+namespace hopper::config {
+
+// One varied parameter of a point: its canonical name ("D_cm", "theta_deg", "material.mu",
+// "integrator.scheme", ...) and value (numbers as double, strings for the scheme).
+struct ParamSetting {
+    std::string name;
+    std::variant<double, std::string> value;
+};
+
+struct Point {
+    std::vector<ParamSetting> settings;  // canonical order: D_cm, theta_deg, then by name
+    engine::SceneParams scene;           // the base scene with the settings applied, validated
+    int realizations = 0;
+    std::string label;                   // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
+};
+
+struct CampaignSpec {
+    std::string name;
+    std::filesystem::path store;    // resolved relative to the sweep file's directory
+    std::uint64_t seed = 0;
+    int realizations = 1;           // default per point
+    std::vector<Point> points;
+};
+
+struct SweepFile {
+    std::filesystem::path path;     // as given ("<string>" when parsed from text)
+    std::string text;               // the file's full text (provenance)
+    engine::SceneParams base;       // the scene sections, validated
+    bool has_campaign = false;      // a [campaign] section was present
+    CampaignSpec campaign;          // filled when has_campaign (points from [sweep]/[[points]])
+};
+
+// Parses and validates. Throws core::ConfigError (file, key, value, allowed range).
+SweepFile load_sweep(const std::filesystem::path& path);
+SweepFile parse_sweep(std::string_view text, const std::filesystem::path& source_name);
+
+// The base scene with outlet D (cm) and wall angle theta (deg) set, validated.
+engine::SceneParams scene_at(const SweepFile& sweep, double D_cm, double theta_deg);
+
+// One realization to run.
+struct Task {
+    int task_id;        // index in the list
+    int point_index;
+    int realization;    // 0-based within the point
+    std::uint64_t seed; // derived from (campaign seed, point's settings, realization)
+};
+
+// Same list on every rank; a task's seed depends only on the campaign seed, its point's
+// settings and its realization index, so adding points or realizations never changes it.
+std::vector<Task> expand_tasks(const CampaignSpec& spec);
+
+// Seed of realization `realization` of a point with the given settings.
+std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<ParamSetting>& settings,
+                          int realization);
+
+}  // namespace hopper::config

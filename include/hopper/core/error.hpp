@@ -1,0 +1,33 @@
+#pragma once
+// Exceptions with context. Each layer throws its own kind so that callers can tell a bad input
+// (ConfigError, StoreError) from a numerical failure (SimulationError).
+
+#include <stdexcept>
+#include <string>
+
+namespace hopper::core {
+
+class Error : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+// A sweep file, command line or parameter set that is not allowed.
+class ConfigError : public Error {
+public:
+    using Error::Error;
+};
+
+// A simulation that cannot go on (non-finite state, overlap blow-up, ...).
+class SimulationError : public Error {
+public:
+    using Error::Error;
+};
+
+// A store that cannot be read or written.
+class StoreError : public Error {
+public:
+    using Error::Error;
+};
+
+}  // namespace hopper::core

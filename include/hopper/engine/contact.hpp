@@ -1,0 +1,107 @@
+#pragma once
+// Contact laws (spec/physics.md, "Contact forces"). Each law is a small value type whose
+// evaluate() is pure and inline; the pair loops in system.cpp are templates over the law, so the
+// choice of law (frictionless / viscous friction / Cundall-Strack spring) is made once at setup
+// and never per contact.
+
+#include <algorithm>
+#include <cmath>
+
+#include "hopper/core/vec.hpp"
+
+namespace hopper::engine {
+
+using core::Vec2;
+
+// Coefficients of one kind of contact (particle-particle or particle-wall).
+struct ContactParams {
+    double k_n = 0.0;      // N/m
+    double gamma_n = 0.0;  // 1/s; damping force = gamma_n * mbar * v_n
+    double k_t = 0.0;      // N/m
+    double gamma_t = 0.0;  // 1/s
+    double mu = 0.0;
+};
+
+// Force on particle i from one contact, split into normal and tangential parts.
+struct ContactForce {
+    Vec2 normal;
+    Vec2 tangential;
+};
+
+// F_n = (k_n x - gamma_n mbar v_n) n   (spec/physics.md, normal force)
+inline Vec2 normal_force(const ContactParams& p, double mbar, const Vec2& n, double overlap,
+                         double v_n) {
+    return (p.k_n * overlap - p.gamma_n * mbar * v_n) * n;
+}
+
+// Frictionless contacts (mu = 0 everywhere): no tangential force, hence no torque and no
+// rotation to integrate.
+struct FrictionlessLaw {
+    static constexpr bool has_tangential = false;
+    static constexpr bool has_history = false;
+    static ContactForce evaluate(const ContactParams& p, double mbar, const Vec2& n,
+                                 double overlap, const Vec2& v_ij, Vec2& /*xi*/, double /*dt*/) {
+        return {normal_force(p, mbar, n, overlap, v_ij.dot(n)), Vec2::Zero()};
+    }
+};
+
+// k_t = 0: viscous ("kinetic") friction only, F_t* = -gamma_t mbar v_t, capped at mu |F_n|.
+// No spring, so no contact history is kept at all.
+struct ViscousFrictionLaw {
+    static constexpr bool has_tangential = true;
+    static constexpr bool has_history = false;
+    static ContactForce evaluate(const ContactParams& p, double mbar, const Vec2& n,
+                                 double overlap, const Vec2& v_ij, Vec2& /*xi*/, double /*dt*/) {
+        const double v_n = v_ij.dot(n);
+        const Vec2 F_n = normal_force(p, mbar, n, overlap, v_n);
+        const Vec2 v_t = v_ij - v_n * n;
+        Vec2 F_t = -p.gamma_t * mbar * v_t;
+        const double cap = p.mu * F_n.norm();
+        const double ft = F_t.norm();
+        if (ft > cap) F_t *= cap / ft;  // ft > cap >= 0, so ft > 0
+        return {F_n, F_t};
+    }
+};
+
+// Cundall-Strack static friction: a tangential spring xi that starts at zero length when the
+// contact forms, is projected onto the current tangent line, grows by v_t dt per step, and is
+// shortened when the Coulomb cap is active (spec/physics.md, tangential force).
+struct SpringFrictionLaw {
+    static constexpr bool has_tangential = true;
+    static constexpr bool has_history = true;
+    static ContactForce evaluate(const ContactParams& p, double mbar, const Vec2& n,
+                                 double overlap, const Vec2& v_ij, Vec2& xi, double dt) {
+        const double v_n = v_ij.dot(n);
+        const Vec2 F_n = normal_force(p, mbar, n, overlap, v_n);
+        const Vec2 v_t = v_ij - v_n * n;
+        // xi' = xi - n (n . xi), then grow by v_t dt
+        xi = xi - n * n.dot(xi) + v_t * dt;
+        // F_t* = -k_t xi' - gamma_t mbar v_t
+        const Vec2 damping = p.gamma_t * mbar * v_t;
+        Vec2 F_t = -p.k_t * xi - damping;
+        const double cap = p.mu * F_n.norm();
+        const double ft = F_t.norm();
+        if (ft > cap) {
+            // F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
+            // xi' = -(F_t + gamma_t mbar v_t) / k_t
+            F_t *= cap / ft;
+            xi = -(F_t + damping) / p.k_t;
+        }
+        return {F_n, F_t};
+    }
+};
+
+// Relative velocity of the contact points of i and j (n points from j to i):
+// v_ij = v_i - v_j - (R_i w_i + R_j w_j) (z x n)   (spec/physics.md)
+inline Vec2 contact_velocity(const Vec2& v_i, const Vec2& v_j, double R_i, double w_i, double R_j,
+                             double w_j, const Vec2& n) {
+    return v_i - v_j - (R_i * w_i + R_j * w_j) * core::perp(n);
+}
+
+// Torque (z) on a particle of radius R touching at -R n with tangential force F_t:
+// I dw/dt = -R (n x F_t). The same expression, with R_j, holds for the partner j.
+inline double contact_torque(double R, const Vec2& n, const Vec2& F_t) {
+    return -R * core::cross(n, F_t);
+}
+
+}  // namespace hopper::engine

@@ -1,0 +1,54 @@
+#pragma once
+// One realization of the hopper: fill, settle, discharge, jam detection, shaking, survival and
+// empty times (spec/physics.md, realization protocol). This is the engine's main entry point.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string_view>
+
+#include "hopper/engine/params.hpp"
+#include "hopper/engine/result.hpp"
+
+namespace hopper::engine {
+
+enum class Phase { settle, discharge, shake };
+std::string_view to_string(Phase p);
+
+// A read-only view of the particles, handed to snapshot callbacks (valid during the call only).
+struct Snapshot {
+    Phase phase;
+    double sim_time;        // s since the fill
+    double discharge_time;  // s since the opening, shaking excluded (0 while settling)
+    std::span<const int> id;
+    std::span<const double> x, y, vx, vy, omega, radius;
+    std::span<const double> wall_x, wall_y, wall_radius;  // current wall positions
+};
+
+struct Progress {
+    Phase phase;
+    double sim_time;
+    double discharge_time;
+    int in_hopper;
+    int n_jams;
+};
+
+struct RunHooks {
+    // Snapshots every snapshot_interval seconds of simulated time (0 = never).
+    double snapshot_interval = 0.0;
+    std::function<void(const Snapshot&)> on_snapshot;
+    // Progress every progress_interval seconds of simulated time (0 = never).
+    double progress_interval = 0.0;
+    std::function<void(const Progress&)> on_progress;
+    // Cooperative stop: when set, the realization ends with status failed and a message saying
+    // it was interrupted (callers treat it as not done).
+    const std::atomic<bool>* stop = nullptr;
+};
+
+// Runs one realization. Never throws for numerical trouble: that ends with Status::failed and a
+// message naming the cause and the remedy. Throws core::ConfigError for invalid parameters.
+RealizationResult run_realization(const SceneParams& params, std::uint64_t seed,
+                                  const RunHooks& hooks = {});
+
+}  // namespace hopper::engine

@@ -1,0 +1,192 @@
+#pragma once
+// The particle system: mobile disks and immobile wall disks, the neighbour list, the contact
+// forces and the time integrator. It knows nothing of hoppers; scene building and the
+// realization protocol live in scene.hpp and realization.hpp.
+//
+// Layout (style.md, hot loop): per-particle state in columns, mobile particles only (walls have
+// their own columns and are never integrated). Particles are re-sorted by cell at neighbour
+// rebuilds, so the index of a particle changes; its id (returned by add_*) never does.
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "hopper/core/vec.hpp"
+#include "hopper/engine/contact.hpp"
+#include "hopper/engine/params.hpp"
+
+namespace hopper::engine {
+
+struct SystemConfig {
+    double dt = 1e-5;                     // s
+    Scheme scheme = Scheme::verlet;
+    ContactParams particle;               // particle-particle contacts
+    ContactParams wall;                   // particle-wall contacts
+    Vec2 gravity{0.0, -core::standard_gravity};
+    double skin = 1e-3;                   // m, Verlet skin of the neighbour list
+    double max_overlap = 0.0;             // m; > 0: a larger overlap stops the run (SimulationError)
+};
+
+// A particle that left through the removal floor.
+struct Removal {
+    int id;
+    double time;  // System::time() when it was removed
+};
+
+struct PhaseSeconds {
+    double forces = 0.0, integration = 0.0, neighbors = 0.0;
+};
+
+class System {
+public:
+    explicit System(const SystemConfig& config);
+    ~System();
+    System(const System&) = delete;
+    System& operator=(const System&) = delete;
+
+    // --- building -------------------------------------------------------------------------
+    // Returns the particle's id (ids are shared by mobile and wall particles and never reused).
+    int add_particle(const Vec2& pos, double diameter, double mass, double inertia,
+                     const Vec2& vel = Vec2::Zero(), double omega = 0.0);
+    int add_wall(const Vec2& pos, double diameter);
+    // Removes wall particles by id (e.g. the gate that closes the outlet while settling).
+    void remove_walls(std::span<const int> ids);
+    // Rigid translation of all walls: positions are base + offset, velocity is shared.
+    void set_wall_motion(const Vec2& offset, const Vec2& velocity);
+    // Mobile particles whose centre falls below this height are removed at the next neighbour
+    // rebuild (or at flush_removals()) and reported by take_removals().
+    void set_removal_floor(double y);
+    void flush_removals();
+    std::vector<Removal> take_removals();
+
+    // --- stepping -------------------------------------------------------------------------
+    // One time step. Throws core::SimulationError on a non-finite state or an overlap beyond
+    // max_overlap; the message names the cause and the remedy.
+    void step();
+    void run(std::int64_t steps);
+
+    // --- state ----------------------------------------------------------------------------
+    double time() const { return time_; }
+    double dt() const { return config_.dt; }
+    const SystemConfig& config() const { return config_; }
+    int mobile_count() const { return static_cast<int>(x_.size()); }
+    int wall_count() const { return static_cast<int>(wx_.size()); }
+    // Index of a mobile particle id, or -1 if there is no such (remaining) particle.
+    int index_of(int id) const;
+    Vec2 position(int index) const { return {x_[index], y_[index]}; }
+    Vec2 velocity(int index) const { return {vx_[index], vy_[index]}; }
+    double omega(int index) const { return w_[index]; }
+    double radius(int index) const { return r_[index]; }
+    double mass(int index) const { return m_[index]; }
+    int id(int index) const { return id_[index]; }
+    void set_velocity(int index, const Vec2& v, double omega);
+    // Columns, for observers and snapshots.
+    std::span<const double> x() const { return x_; }
+    std::span<const double> y() const { return y_; }
+    std::span<const double> vx() const { return vx_; }
+    std::span<const double> vy() const { return vy_; }
+    std::span<const double> w() const { return w_; }
+    std::span<const double> r() const { return r_; }
+    std::span<const double> m() const { return m_; }
+    std::span<const int> ids() const { return id_; }
+    std::span<const double> wall_x() const { return wx_; }  // base positions (add offset)
+    std::span<const double> wall_y() const { return wy_; }
+    std::span<const double> wall_r() const { return wr_; }
+    std::span<const int> wall_ids() const { return wid_; }
+    Vec2 wall_offset() const { return wall_offset_; }
+    Vec2 wall_velocity() const { return wall_velocity_; }
+
+    // Energies (J): kinetic (translation + rotation), gravitational (-m g.r summed, zero at the
+    // origin), elastic (normal and tangential springs of the current contacts; computed on
+    // demand from the neighbour list, never in the hot loop).
+    double kinetic_energy() const;
+    double potential_energy() const;
+    double elastic_energy() const;
+    // Total force exerted by the particles on all walls in the last force evaluation.
+    Vec2 wall_force() const { return wall_force_; }
+    // Largest overlap seen since the last reset (m).
+    double max_overlap() const { return max_overlap_seen_; }
+    void reset_max_overlap() { max_overlap_seen_ = 0.0; }
+    // Number of active contacts (overlap > 0) in the last force evaluation.
+    int contact_count() const { return contacts_; }
+    std::int64_t neighbor_rebuilds() const { return rebuilds_; }
+    const PhaseSeconds& phase_seconds() const { return phase_; }
+    // Candidate pairs in the neighbour list (mobile-mobile, mobile-wall).
+    std::int64_t pair_count() const { return static_cast<std::int64_t>(pj_.size()); }
+    std::int64_t wall_pair_count() const { return static_cast<std::int64_t>(wj_.size()); }
+    // Every (id, id) pair within contact distance, from the neighbour list (for tests).
+    std::vector<std::pair<int, int>> contacts_from_list();
+
+    // Implementation detail: the kernel chosen at setup (law x integrator).
+    struct Kernel;
+
+private:
+    template <class Law> friend struct LawKernel;
+
+    void ensure_ready();
+    void rebuild();
+    void save_history();
+    void restore_history();
+    void build_wall_grid();
+    void remove_below_floor();
+    void permute_by_cell();
+    void build_pairs();
+    void fail_nonfinite(const char* where);
+
+    SystemConfig config_;
+    std::unique_ptr<Kernel> kernel_;
+    double time_ = 0.0;
+    bool ready_ = false;         // forces and integrator history initialised
+    bool need_rebuild_ = true;
+    bool walls_changed_ = true;
+    bool rotation_ = true;       // integrate rotation (false when no contact can exert torque)
+    bool history_ = false;       // keep tangential springs (k_t > 0 and mu > 0)
+    int next_id_ = 0;
+
+    // Mobile particle columns.
+    std::vector<double> x_, y_, vx_, vy_, w_, fx_, fy_, tq_;
+    std::vector<double> r_, m_, inv_m_, inv_I_;
+    std::vector<int> id_;
+    // Gear predictor-corrector: scaled derivatives r_k = dt^k/k! d^k r/dt^k, k = 2..4.
+    std::vector<double> x2_, x3_, x4_, y2_, y3_, y4_, w2_, w3_, w4_;
+    // Positions at the last rebuild (for the displacement criterion).
+    std::vector<double> xref_, yref_;
+    Vec2 wall_offset_ref_ = Vec2::Zero();
+
+    // Wall columns (base positions).
+    std::vector<double> wx_, wy_, wr_;
+    std::vector<int> wid_;
+    Vec2 wall_offset_ = Vec2::Zero();
+    Vec2 wall_velocity_ = Vec2::Zero();
+
+    // Neighbour list (half list, CSR by mobile index): mobile-mobile and mobile-wall.
+    std::vector<int> pstart_, pj_, wstart_, wj_;
+    std::vector<double> pxi_x_, pxi_y_, wxi_x_, wxi_y_;  // tangential springs (if history_)
+    // Cell grid for mobile particles (rebuilt with the list) and for walls (when walls change).
+    double cell_size_ = 0.0, grid_x0_ = 0.0, grid_y0_ = 0.0;
+    int grid_nx_ = 0, grid_ny_ = 0;
+    std::vector<int> cell_start_, cell_of_, order_;
+    double wcell_size_ = 0.0, wgrid_x0_ = 0.0, wgrid_y0_ = 0.0;
+    int wgrid_nx_ = 0, wgrid_ny_ = 0;
+    std::vector<int> wcell_start_, wcell_items_;
+    double r_max_ = 0.0, wr_max_ = 0.0;
+    // Contact history saved across a rebuild, grouped by owner id (CSR).
+    std::vector<int> hist_start_, hist_partner_;
+    std::vector<double> hist_x_, hist_y_;
+    std::vector<double> scratch_;
+    std::vector<int> iscratch_;
+
+    double removal_floor_ = -1e300;
+    std::vector<Removal> removals_;
+
+    // Observables of the last force evaluation.
+    Vec2 wall_force_ = Vec2::Zero();
+    double max_overlap_seen_ = 0.0;
+    int contacts_ = 0;
+    std::int64_t rebuilds_ = 0;
+    PhaseSeconds phase_;
+};
+
+}  // namespace hopper::engine

@@ -1,0 +1,138 @@
+#include "hopper/engine/params.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "hopper/core/error.hpp"
+
+namespace hopper::engine {
+
+using core::ConfigError;
+using core::pi;
+
+std::string to_string(Scheme s) { return s == Scheme::gear4 ? "gear4" : "verlet"; }
+
+namespace {
+
+// Rejects value unless lo <= value <= hi (or lo < value when open_lo), naming the parameter.
+void require_range(const char* name, double value, double lo, double hi, bool open_lo = false,
+                   const char* unit = "") {
+    const bool ok = std::isfinite(value) && (open_lo ? value > lo : value >= lo) && value <= hi;
+    if (!ok) {
+        std::ostringstream msg;
+        msg << "parameter " << name << " = " << value << unit << " is out of range: allowed "
+            << (open_lo ? "(" : "[") << lo << ", " << hi << "]" << unit;
+        throw ConfigError(msg.str());
+    }
+}
+
+}  // namespace
+
+void validate_scene(const SceneParams& p) {
+    const auto& h = p.hopper;
+    const auto& s = p.particles;
+    const auto& m = p.material;
+    const auto& pr = p.protocol;
+    require_range("particles.d_small", s.d_small, 0.0, 1.0, true, " m");
+    require_range("particles.d_large", s.d_large, s.d_small, 1.0, false, " m");
+    require_range("hopper.width", h.width, 2.0 * s.d_large, 100.0, true, " m");
+    require_range("hopper.outlet", h.outlet, 0.0, h.width, true, " m");
+    require_range("hopper.theta", h.theta, 0.0, pi / 2, false, " rad");
+    require_range("walls.diameter", h.wall_diameter, 0.0, 1.0, true, " m");
+    // No system particle may slip between two wall particles: gap < d_small.
+    const double max_spacing = 1.0 + s.d_small / h.wall_diameter;
+    if (!(h.wall_spacing >= 0.1 && h.wall_spacing < max_spacing)) {
+        std::ostringstream msg;
+        msg << "parameter walls.spacing = " << h.wall_spacing
+            << " (centre distance / wall diameter) is out of range: allowed [0.1, " << max_spacing
+            << ") so that no particle of diameter " << s.d_small
+            << " m slips between two wall particles";
+        throw ConfigError(msg.str());
+    }
+    if (s.count < 1 || s.count > 10'000'000)
+        throw ConfigError("parameter particles.count = " + std::to_string(s.count) +
+                          " is out of range: allowed [1, 10000000]");
+    require_range("particles.small_fraction", s.small_fraction, 0.0, 1.0);
+    require_range("particles.thickness", s.thickness, 0.0, 1.0, true, " m");
+    require_range("particles.density", s.density, 0.0, 1e5, true, " kg/m^3");
+    require_range("material.e_n", m.system.e_n, 0.0, 1.0, true);
+    require_range("material.mu", m.system.mu, 0.0, 10.0);
+    require_range("walls.e_n", m.wall.e_n, 0.0, 1.0, true);
+    require_range("walls.mu", m.wall.mu, 0.0, 10.0);
+    require_range("material.kt_over_kn", m.kt_over_kn, 0.0, 10.0);
+    require_range("material.youngs_modulus", m.youngs_modulus, 0.0, 1e13, true, " Pa");
+    require_range("material.poisson_ratio", m.poisson_ratio, -1.0, 0.5);
+    if (m.collision_time) require_range("material.collision_time", *m.collision_time, 0.0, 1.0, true, " s");
+    require_range("integrator.steps_per_collision", p.integrator.steps_per_collision, 2.0, 1e5);
+    require_range("integrator.skin", p.integrator.skin, 0.0, 10.0, true);
+    require_range("gravity", p.gravity, 0.0, 1e3, true, " m/s^2");
+    require_range("protocol.fill_gap", pr.fill_gap, 0.0, 10.0);
+    require_range("protocol.fill_speed", pr.fill_speed, 0.0, 10.0, false, " m/s");
+    require_range("protocol.settle_ke", pr.settle_ke, 0.0, 1.0, true);
+    require_range("protocol.settle_hold", pr.settle_hold, 0.0, 100.0, true, " s");
+    require_range("protocol.settle_max_time", pr.settle_max_time, 0.0, 1e5, true, " s");
+    require_range("protocol.jam_region_height", pr.jam_region_height, 0.0, 100.0, true);
+    if (pr.t_check) require_range("protocol.t_check", *pr.t_check, 0.0, 100.0, true, " s");
+    require_range("protocol.detector_interval", pr.detector_interval, 0.0, 1.0, true, " s");
+    require_range("protocol.shake_amplitude", pr.shake_amplitude, 0.0, 100.0, true);
+    require_range("protocol.shake_period", pr.shake_period, 0.0, 100.0, true, " s");
+    require_range("protocol.shake_direction", pr.shake_direction, -pi, pi, false, " rad");
+    if (pr.max_shakes < 0 || pr.max_shakes > 100000)
+        throw ConfigError("parameter protocol.max_shakes = " + std::to_string(pr.max_shakes) +
+                          " is out of range: allowed [0, 100000]");
+    require_range("protocol.max_time", pr.max_time, 0.0, 1e7, true, " s");
+    require_range("protocol.exit_depth", pr.exit_depth, pr.jam_region_height, 1000.0, true);
+    if (pr.empty_threshold < 0 || pr.empty_threshold >= s.count)
+        throw ConfigError("parameter protocol.empty_threshold = " +
+                          std::to_string(pr.empty_threshold) + " is out of range: allowed [0, " +
+                          std::to_string(s.count - 1) + "]");
+    require_range("protocol.sample_interval", pr.sample_interval, 0.0, 1e3, true, " s");
+    require_range("protocol.max_overlap", pr.max_overlap, 0.0, 1.0, true);
+}
+
+double hertz_collision_time(double m, double d, double youngs_modulus, double poisson_ratio,
+                            double v0) {
+    // t_col = I(b) ((1+b)/2)^(1/(2+b)) (m / (E d^(1-b)))^(1/(2+b)) v0^(-b/(2+b)),  b = 1/2,
+    // E = Y / (3 (1 - sigma^2)),  I(b) = 2 int_0^1 dy / sqrt(1 - y^(2+b))   (spec/physics.md)
+    // With p = 2 + b: int_0^1 (1 - y^p)^(-1/2) dy = B(1/p, 1/2) / p
+    //                = Gamma(1/p) Gamma(1/2) / (p Gamma(1/p + 1/2)).
+    const double b = 0.5;
+    const double p = 2.0 + b;
+    const double I_b = 2.0 * std::tgamma(1.0 / p) * std::sqrt(pi) / (p * std::tgamma(1.0 / p + 0.5));
+    const double E = youngs_modulus / (3.0 * (1.0 - poisson_ratio * poisson_ratio));
+    return I_b * std::pow((1.0 + b) / 2.0, 1.0 / p) * std::pow(m / (E * std::pow(d, 1.0 - b)), 1.0 / p) *
+           std::pow(v0, -b / p);
+}
+
+DerivedConstants derive_constants(const SceneParams& p) {
+    const auto& s = p.particles;
+    const auto& mat = p.material;
+    DerivedConstants c{};
+    // m = rho pi d^2/4 h,  I = m d^2 / 8   (spec/physics.md, particles)
+    auto mass = [&](double d) { return s.density * pi * d * d / 4.0 * s.thickness; };
+    c.m_small = mass(s.d_small);
+    c.m_large = mass(s.d_large);
+    c.I_small = c.m_small * s.d_small * s.d_small / 8.0;
+    c.I_large = c.m_large * s.d_large * s.d_large / 8.0;
+    const double v0 = std::sqrt(2.0 * p.gravity * s.d_large);
+    // For Poisson ratio 0.5 (incompressible) E = Y/(3 * 0.75) is finite; at sigma -> +-1 it is not.
+    c.hertz_time = (std::abs(mat.poisson_ratio) < 1.0)
+                       ? hertz_collision_time(c.m_large, s.d_large, mat.youngs_modulus,
+                                              mat.poisson_ratio, v0)
+                       : 0.0;
+    c.tau_c = mat.collision_time.value_or(c.hertz_time);
+    if (!(c.tau_c > 0.0))
+        throw core::ConfigError("the collision time could not be derived from the material "
+                                "(poisson_ratio must be in (-1, 0.5]); give material.collision_time_s");
+    // tau_c = pi sqrt(m_large / (2 k_n))  =>  k_n = m_large pi^2 / (2 tau_c^2)
+    c.k_n = c.m_large * pi * pi / (2.0 * c.tau_c * c.tau_c);
+    c.k_t = mat.kt_over_kn * c.k_n;
+    // gamma_n = -2 ln(e_n) / tau_c
+    c.gamma_n_system = -2.0 * std::log(mat.system.e_n) / c.tau_c;
+    c.gamma_n_wall = -2.0 * std::log(mat.wall.e_n) / c.tau_c;
+    c.dt = c.tau_c / p.integrator.steps_per_collision;
+    c.t_check = p.protocol.t_check.value_or(2.0 * std::sqrt(s.d_large / p.gravity));
+    return c;
+}
+
+}  // namespace hopper::engine
