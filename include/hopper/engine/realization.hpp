@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string_view>
 
@@ -44,6 +45,36 @@ struct RunHooks {
     // Cooperative stop: when set, the realization ends with status failed and a message saying
     // it was interrupted (callers treat it as not done).
     const std::atomic<bool>* stop = nullptr;
+};
+
+class System;
+
+// One realization, phase by phase (for benchmarks and tests; run_realization() composes them).
+// Construction builds the scene and the fill. Numerical failures (core::SimulationError) are
+// recorded, not thrown: after one, every further call does nothing and result() says failed.
+class Realization {
+public:
+    Realization(const SceneParams& params, std::uint64_t seed, RunHooks hooks = {});
+    ~Realization();
+    Realization(const Realization&) = delete;
+    Realization& operator=(const Realization&) = delete;
+
+    // Settles the packing with the outlet closed until it is at rest (realization step 2).
+    void settle();
+    // Removes the gate: discharge starts, t = 0 (step 3).
+    void open();
+    // Runs the discharge protocol (steps 3-7) for up to `discharge_seconds` of discharge time
+    // (shaking excluded). Returns false once the realization has ended.
+    bool advance(double discharge_seconds);
+    bool finished() const;
+    // The result so far (final once finished()).
+    RealizationResult result() const;
+    System& system();
+    Phase phase() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
 };
 
 // Runs one realization. Never throws for numerical trouble: that ends with Status::failed and a

@@ -123,17 +123,19 @@ public:
     struct Kernel;
 
 private:
-    template <class Law> friend struct LawKernel;
+    template <class Law, Scheme S>
+    friend struct KernelImpl;
 
     void ensure_ready();
     void rebuild();
     void save_history();
     void restore_history();
-    void build_wall_grid();
+    void build_wall_grid(double cutoff);
     void remove_below_floor();
-    void permute_by_cell();
+    void permute_by_cell(double cutoff);
     void build_pairs();
-    void fail_nonfinite(const char* where);
+    [[noreturn]] void fail_nonfinite() const;
+    void check_overlap(double step_max_overlap);
 
     SystemConfig config_;
     std::unique_ptr<Kernel> kernel_;
@@ -141,6 +143,7 @@ private:
     bool ready_ = false;         // forces and integrator history initialised
     bool need_rebuild_ = true;
     bool walls_changed_ = true;
+    bool history_saved_ = false;  // save_history() already ran for the coming rebuild
     bool rotation_ = true;       // integrate rotation (false when no contact can exert torque)
     bool history_ = false;       // keep tangential springs (k_t > 0 and mu > 0)
     int next_id_ = 0;

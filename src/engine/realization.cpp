@@ -1,0 +1,526 @@
+#include "hopper/engine/realization.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "hopper/core/error.hpp"
+#include "hopper/core/random.hpp"
+#include "hopper/engine/scene.hpp"
+#include "hopper/engine/system.hpp"
+
+namespace hopper::engine {
+
+std::string to_string(Status s) {
+    switch (s) {
+        case Status::complete: return "complete";
+        case Status::arrested: return "arrested";
+        case Status::time_limit: return "time_limit";
+        case Status::failed: return "failed";
+    }
+    return "unknown";
+}
+
+std::string to_string(Event::Kind k) {
+    switch (k) {
+        case Event::Kind::settled: return "settled";
+        case Event::Kind::opened: return "opened";
+        case Event::Kind::jam: return "jam";
+        case Event::Kind::shake_start: return "shake_start";
+        case Event::Kind::shake_end: return "shake_end";
+        case Event::Kind::flow_restart: return "flow_restart";
+        case Event::Kind::empty: return "empty";
+        case Event::Kind::stop: return "stop";
+    }
+    return "unknown";
+}
+
+std::string_view to_string(Phase p) {
+    switch (p) {
+        case Phase::settle: return "settle";
+        case Phase::discharge: return "discharge";
+        case Phase::shake: return "shake";
+    }
+    return "unknown";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Steps between two looks of an observer that wants to run every `seconds`.
+std::int64_t every(double seconds, double dt) {
+    return std::max<std::int64_t>(1, std::llround(seconds / dt));
+}
+
+SystemConfig system_config(const SceneParams& p, const DerivedConstants& c) {
+    SystemConfig sc;
+    sc.dt = c.dt;
+    sc.scheme = p.integrator.scheme;
+    sc.gravity = Vec2(0.0, -p.gravity);
+    sc.skin = p.integrator.skin * p.particles.d_small;
+    sc.max_overlap = p.protocol.max_overlap * p.particles.d_small;
+    // k_t = kt_over_kn k_n, gamma_t = gamma_n / 2   (spec/physics.md, tangential force)
+    sc.particle = {c.k_n, c.gamma_n_system, c.k_t, c.gamma_n_system / 2, p.material.system.mu};
+    sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall / 2, p.material.wall.mu};
+    return sc;
+}
+
+// Least-squares slope of y against x.
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+    const double n = double(x.size());
+    double sx = 0, sy = 0;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+        sx += x[k];
+        sy += y[k];
+    }
+    const double mx = sx / n, my = sy / n;
+    double sxx = 0, sxy = 0;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+        sxx += (x[k] - mx) * (x[k] - mx);
+        sxy += (x[k] - mx) * (y[k] - my);
+    }
+    return sxx > 0 ? sxy / sxx : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+struct Realization::Impl {
+    enum class Flow { flowing, shaking, checking, ended };
+
+    SceneParams p;
+    DerivedConstants c;
+    RunHooks hooks;
+    RealizationResult res;
+    std::unique_ptr<System> sys;
+    std::vector<int> gate_ids;
+    std::vector<double> mass_of_id;  // by particle id (walls: 0)
+    Phase phase = Phase::settle;
+    Flow flow = Flow::flowing;
+    Clock::time_point wall_start;
+    double particle_steps = 0.0;
+
+    // Discharge clocks and detector state (discharge time td excludes shaking).
+    double td = 0.0;
+    double flow_start = 0.0;    // td at which the current survival interval began
+    double last_occupied = 0.0; // td at which the region last held a particle
+    double check_start = 0.0;   // td at which the post-shake check began
+    double shake_start = 0.0;   // sim time at which the current shake began
+    int shakes_this_jam = 0;
+    std::vector<std::pair<double, double>> jammed;  // [onset, restart) in td
+    std::vector<double> exit_mass;
+    // Observer schedule.
+    std::int64_t step_count = 0;
+    std::int64_t k_detect = 1, k_sample = 1, k_settle = 1;
+    double next_snapshot = 0.0, next_progress = 0.0;
+    double ke_limit = 0.0;       // mean KE per particle beyond which we call it a blow-up
+    double y_region = 0.0;       // the detector region is |x| < D/2, y_region < y < 0
+
+    Impl(const SceneParams& params, std::uint64_t seed, RunHooks h)
+        : p(params), hooks(std::move(h)), wall_start(Clock::now()) {
+        validate_scene(p);
+        c = derive_constants(p);
+        res.seed = seed;
+        res.particles = p.particles.count;
+        res.diagnostics.dt = c.dt;
+        res.diagnostics.tau_c = c.tau_c;
+        res.diagnostics.k_n = c.k_n;
+        core::Rng rng(seed);
+        const SceneLayout layout = build_scene(p, rng);
+        sys = std::make_unique<System>(system_config(p, c));
+        for (const auto& w : layout.walls) sys->add_wall(w.pos, w.diameter);
+        for (const auto& w : layout.gate) gate_ids.push_back(sys->add_wall(w.pos, w.diameter));
+        for (const auto& f : layout.fill) {
+            const double m = f.large ? c.m_large : c.m_small;
+            const double I = f.large ? c.I_large : c.I_small;
+            const int id = sys->add_particle(f.pos, f.diameter, m, I, f.vel, 0.0);
+            if (int(mass_of_id.size()) <= id) mass_of_id.resize(id + 1, 0.0);
+            mass_of_id[id] = m;
+        }
+        res.wall_particles = sys->wall_count() - int(gate_ids.size());
+        k_detect = every(p.protocol.detector_interval, c.dt);
+        k_sample = every(p.protocol.sample_interval, c.dt);
+        k_settle = every(1e-3, c.dt);
+        y_region = -p.protocol.jam_region_height * p.particles.d_large;
+        // Mean kinetic energy per particle can never exceed the potential energy of a fall from
+        // the top of the walls to the removal floor (plus shaking); 100x that is a blow-up.
+        const double drop = layout.wall_top + p.protocol.exit_depth * p.particles.d_large;
+        ke_limit = 100.0 * c.m_large * p.gravity * drop;
+        res.diagnostics.potential_energy_released = sys->potential_energy();
+    }
+
+    bool ended() const { return flow == Flow::ended; }
+
+    void fail(const std::string& why) {
+        res.status = Status::failed;
+        res.message = why;
+        end_run(Event::Kind::stop);
+    }
+
+    void end_run(Event::Kind kind) {
+        if (flow == Flow::ended) return;
+        flow = Flow::ended;
+        log(kind);
+        // The rate is a property of the whole discharge: computed once, at the end.
+        if (res.status != Status::failed) discharge_rate();
+    }
+
+    void log(Event::Kind kind) {
+        res.events.push_back({kind, td, sys->time(), sys->mobile_count()});
+    }
+
+    double mean_ke() const {
+        const int n = sys->mobile_count();
+        return n > 0 ? sys->kinetic_energy() / n : 0.0;
+    }
+
+    void check_energy() {
+        const double ke = mean_ke();
+        if (!(ke <= ke_limit)) {
+            std::ostringstream msg;
+            msg << "kinetic energy blow-up: mean kinetic energy per particle " << ke
+                << " J exceeds " << ke_limit << " J at t = " << sys->time()
+                << " s; the integration is unstable: raise integrator.steps_per_collision (now "
+                << p.integrator.steps_per_collision << ")";
+            throw core::SimulationError(msg.str());
+        }
+    }
+
+    void step() {
+        sys->step();
+        ++step_count;
+        particle_steps += sys->mobile_count();
+        if (hooks.on_snapshot && hooks.snapshot_interval > 0 && sys->time() >= next_snapshot) {
+            snapshot();
+            next_snapshot += hooks.snapshot_interval;
+        }
+        if (hooks.on_progress && hooks.progress_interval > 0 && sys->time() >= next_progress) {
+            hooks.on_progress({phase, sys->time(), td, sys->mobile_count(), res.n_jams});
+            next_progress += hooks.progress_interval;
+        }
+    }
+
+    void snapshot() {
+        std::vector<double> wx(sys->wall_x().begin(), sys->wall_x().end());
+        std::vector<double> wy(sys->wall_y().begin(), sys->wall_y().end());
+        for (auto& v : wx) v += sys->wall_offset().x();
+        for (auto& v : wy) v += sys->wall_offset().y();
+        hooks.on_snapshot({phase, sys->time(), td, sys->ids(), sys->x(), sys->y(), sys->vx(),
+                           sys->vy(), sys->w(), sys->r(), wx, wy, sys->wall_r()});
+    }
+
+    bool stop_requested() const { return hooks.stop && hooks.stop->load(); }
+
+    // ----- settle (step 2) --------------------------------------------------------------
+    void settle() {
+        const double threshold = p.protocol.settle_ke * c.m_large * p.gravity * p.particles.d_large;
+        double below_since = -1.0;
+        while (true) {
+            step();
+            ++res.diagnostics.settle_steps;
+            if (step_count % k_settle != 0) continue;
+            if (stop_requested()) return fail("interrupted while settling (stop requested)");
+            check_energy();
+            const double ke = mean_ke();
+            if (ke < threshold) {
+                if (below_since < 0) below_since = sys->time();
+                if (sys->time() - below_since >= p.protocol.settle_hold) break;
+            } else {
+                below_since = -1.0;
+            }
+            if (sys->time() > p.protocol.settle_max_time) {
+                std::ostringstream msg;
+                msg << "the packing did not come to rest within protocol.settle_max_time_s = "
+                    << p.protocol.settle_max_time << " s (mean kinetic energy " << ke
+                    << " J per particle, threshold " << threshold
+                    << " J); raise settle_max_time_s or settle_ke";
+                return fail(msg.str());
+            }
+        }
+        res.diagnostics.settle_time = sys->time();
+        res.diagnostics.settled_kinetic_energy = mean_ke();
+        log(Event::Kind::settled);
+    }
+
+    // ----- open (step 3) ----------------------------------------------------------------
+    void open() {
+        sys->remove_walls(gate_ids);
+        sys->set_removal_floor(-p.protocol.exit_depth * p.particles.d_large);
+        phase = Phase::discharge;
+        flow = Flow::flowing;
+        td = flow_start = last_occupied = 0.0;
+        log(Event::Kind::opened);
+        sample();
+    }
+
+    // ----- discharge (steps 3-7) --------------------------------------------------------
+    bool region_occupied() const {
+        const double half = p.hopper.outlet / 2;
+        const auto x = sys->x(), y = sys->y();
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (y[i] < 0.0 && y[i] > y_region && std::abs(x[i]) < half) return true;
+        return false;
+    }
+
+    void sample() {
+        res.curve_time.push_back(td);
+        res.curve_count.push_back(sys->mobile_count());
+    }
+
+    void start_shake() {
+        ++shakes_this_jam;
+        ++res.n_shakes;
+        shake_start = sys->time();
+        phase = Phase::shake;
+        flow = Flow::shaking;
+        log(Event::Kind::shake_start);
+    }
+
+    // Wall motion of the shake at the end of the coming step: one sinusoidal oscillation.
+    void drive_walls() {
+        const double T = p.protocol.shake_period;
+        const double tau = sys->time() + c.dt - shake_start;
+        if (tau >= T) {
+            sys->set_wall_motion(Vec2::Zero(), Vec2::Zero());
+            return;
+        }
+        const double A = p.protocol.shake_amplitude * p.particles.d_large;
+        const double om = 2.0 * core::pi / T;
+        const Vec2 e(std::cos(p.protocol.shake_direction), std::sin(p.protocol.shake_direction));
+        sys->set_wall_motion(A * std::sin(om * tau) * e, A * om * std::cos(om * tau) * e);
+    }
+
+    void record_removals() {
+        for (const Removal& r : sys->take_removals()) {
+            res.exit_times.push_back(td);
+            exit_mass.push_back(mass_of_id[r.id]);
+            ++res.discharged;
+        }
+    }
+
+    void detect() {
+        const bool occupied = region_occupied();
+        switch (flow) {
+            case Flow::flowing:
+                if (occupied) {
+                    last_occupied = td;
+                } else if (td - last_occupied >= c.t_check) {
+                    // Jammed: the onset is the last moment the region held a particle.
+                    res.jam_onsets.push_back(last_occupied);
+                    res.survival_times.push_back(last_occupied - flow_start);
+                    res.censored.push_back(false);
+                    res.shakes_per_jam.push_back(0);
+                    ++res.n_jams;
+                    res.events.push_back(
+                        {Event::Kind::jam, last_occupied, sys->time(), sys->mobile_count()});
+                    jammed.emplace_back(last_occupied, td);
+                    shakes_this_jam = 0;
+                    if (p.protocol.max_shakes == 0) return arrest();
+                    start_shake();
+                }
+                break;
+            case Flow::checking:
+                if (occupied) {
+                    // The shake cleared the jam: a new survival interval starts at its end.
+                    flow = Flow::flowing;
+                    last_occupied = td;
+                    jammed.back().second = check_start;
+                    flow_start = check_start;
+                    log(Event::Kind::flow_restart);
+                } else if (td - check_start >= c.t_check) {
+                    if (shakes_this_jam >= p.protocol.max_shakes) return arrest();
+                    start_shake();
+                }
+                break;
+            case Flow::shaking:
+            case Flow::ended: break;
+        }
+    }
+
+    void arrest() {
+        res.shakes_per_jam.back() = shakes_this_jam;
+        res.status = Status::arrested;
+        std::ostringstream msg;
+        msg << "jam at t = " << res.jam_onsets.back() << " s not cleared after "
+            << shakes_this_jam << " shake(s) (protocol.max_shakes = " << p.protocol.max_shakes
+            << "); " << sys->mobile_count() << " particles left";
+        res.message = msg.str();
+        jammed.back().second = td;
+        end_run(Event::Kind::stop);
+    }
+
+    void finish_shake() {
+        sys->set_wall_motion(Vec2::Zero(), Vec2::Zero());
+        res.shakes_per_jam.back() = shakes_this_jam;
+        phase = Phase::discharge;
+        flow = Flow::checking;
+        check_start = td;
+        log(Event::Kind::shake_end);
+    }
+
+    // Ends the current survival interval as right-censored (the run stopped while flowing).
+    void censor_final_interval(double t_end) {
+        if (flow != Flow::flowing) return;
+        res.survival_times.push_back(std::max(0.0, t_end - flow_start));
+        res.censored.push_back(true);
+    }
+
+    bool advance(double seconds) {
+        if (ended()) return false;
+        const double until = td + seconds;
+        const int empty_at = p.protocol.empty_threshold;
+        while (!ended() && td < until) {
+            if (flow == Flow::shaking) drive_walls();
+            step();
+            if (flow == Flow::shaking) {
+                res.diagnostics.shake_time += c.dt;
+                if (sys->time() - shake_start >= p.protocol.shake_period - 0.5 * c.dt)
+                    finish_shake();
+            } else {
+                td += c.dt;
+            }
+            record_removals();
+            if (step_count % k_detect == 0) {
+                if (stop_requested()) {
+                    fail("interrupted (stop requested)");
+                    return false;
+                }
+                detect();
+            }
+            if (step_count % k_sample == 0) {
+                check_energy();
+                sys->flush_removals();
+                record_removals();
+                if (flow != Flow::shaking) sample();
+            }
+            if (!ended() && sys->mobile_count() <= empty_at) {
+                sys->flush_removals();
+                record_removals();
+                const double t_empty = res.exit_times.empty() ? td : res.exit_times.back();
+                res.empty_time = t_empty;
+                censor_final_interval(t_empty);
+                res.status = Status::complete;
+                res.message = "the hopper emptied";
+                sample();
+                end_run(Event::Kind::empty);
+            } else if (!ended() && td >= p.protocol.max_time) {
+                censor_final_interval(td);
+                res.status = Status::time_limit;
+                std::ostringstream msg;
+                msg << "stopped at protocol.max_time_s = " << p.protocol.max_time << " s with "
+                    << sys->mobile_count() << " particles left";
+                res.message = msg.str();
+                sample();
+                end_run(Event::Kind::stop);
+            }
+        }
+        return !ended();
+    }
+
+    void discharge_rate() {
+        // Steady part: the exits between 20 % and 80 % of all discharged particles, against
+        // the flowing time (discharge time minus the jammed periods).
+        const std::size_t n = res.exit_times.size();
+        if (n < 20) return;
+        const std::size_t lo = n / 5, hi = (4 * n) / 5;
+        std::vector<double> t, count, mass;
+        double cum_mass = 0.0;
+        for (std::size_t k = 0; k < n; ++k) {
+            cum_mass += exit_mass[k];
+            if (k < lo || k >= hi) continue;
+            double flowing = res.exit_times[k];
+            for (const auto& [on, off] : jammed)
+                if (on < res.exit_times[k]) flowing -= std::min(off, res.exit_times[k]) - on;
+            t.push_back(flowing);
+            count.push_back(double(k + 1));
+            mass.push_back(cum_mass);
+        }
+        const double rate = slope(t, count);
+        if (std::isfinite(rate) && rate > 0) {
+            res.discharge_rate = rate;
+            res.discharge_rate_mass = slope(t, mass);
+        }
+    }
+
+    RealizationResult result() const {
+        RealizationResult out = res;
+        out.n_jams_multi_shake = int(std::count_if(out.shakes_per_jam.begin(),
+                                                   out.shakes_per_jam.end(),
+                                                   [](int n) { return n > 1; }));
+        auto& d = out.diagnostics;
+        d.steps = step_count;
+        d.neighbor_rebuilds = sys->neighbor_rebuilds();
+        d.wall_seconds = std::chrono::duration<double>(Clock::now() - wall_start).count();
+        d.ns_per_particle_step = particle_steps > 0 ? d.wall_seconds * 1e9 / particle_steps : 0.0;
+        d.max_overlap_ratio = sys->max_overlap() / p.particles.d_small;
+        d.seconds_forces = sys->phase_seconds().forces;
+        d.seconds_integration = sys->phase_seconds().integration;
+        d.seconds_neighbors = sys->phase_seconds().neighbors;
+        d.seconds_observers = std::max(
+            0.0, d.wall_seconds - d.seconds_forces - d.seconds_integration - d.seconds_neighbors);
+        // Potential energy released: from the fill to now, removed particles counted at the
+        // removal floor.
+        double removed_mass = 0.0;
+        for (double m : exit_mass) removed_mass += m;
+        d.potential_energy_released =
+            res.diagnostics.potential_energy_released -
+            (sys->potential_energy() +
+             removed_mass * p.gravity * (-p.protocol.exit_depth * p.particles.d_large));
+        return out;
+    }
+};
+
+Realization::Realization(const SceneParams& params, std::uint64_t seed, RunHooks hooks)
+    : impl_(std::make_unique<Impl>(params, seed, std::move(hooks))) {}
+
+Realization::~Realization() = default;
+
+void Realization::settle() {
+    if (impl_->ended()) return;
+    try {
+        impl_->settle();
+    } catch (const core::SimulationError& e) {
+        impl_->fail(std::string("while settling: ") + e.what());
+    }
+}
+
+void Realization::open() {
+    if (impl_->ended()) return;
+    try {
+        impl_->open();
+    } catch (const core::SimulationError& e) {
+        impl_->fail(std::string("at opening: ") + e.what());
+    }
+}
+
+bool Realization::advance(double discharge_seconds) {
+    if (impl_->ended()) return false;
+    try {
+        return impl_->advance(discharge_seconds);
+    } catch (const core::SimulationError& e) {
+        impl_->fail(std::string("during discharge: ") + e.what());
+        return false;
+    }
+}
+
+bool Realization::finished() const { return impl_->ended(); }
+
+RealizationResult Realization::result() const { return impl_->result(); }
+
+System& Realization::system() { return *impl_->sys; }
+
+Phase Realization::phase() const { return impl_->phase; }
+
+RealizationResult run_realization(const SceneParams& params, std::uint64_t seed,
+                                  const RunHooks& hooks) {
+    Realization r(params, seed, hooks);
+    r.settle();
+    r.open();
+    while (r.advance(std::numeric_limits<double>::infinity())) {
+    }
+    return r.result();
+}
+
+}  // namespace hopper::engine

@@ -1,0 +1,133 @@
+#include "hopper/engine/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "hopper/core/error.hpp"
+
+namespace hopper::engine {
+
+namespace {
+
+// theta within this of 90 deg is treated as exactly vertical (a slot of free width D).
+constexpr double vertical_tolerance = 1e-9;
+
+bool is_slot(const HopperGeometry& g) { return g.theta >= core::pi / 2 - vertical_tolerance; }
+
+// Places particles of diameter d at arc-length steps of at most `spacing` along the polyline
+// `pts` (both ends included), mirrored to the left side when `mirror`.
+void place_along(const std::vector<Vec2>& pts, double spacing, double d, bool mirror,
+                 std::vector<WallParticle>& out) {
+    double total = 0.0;
+    for (std::size_t k = 1; k < pts.size(); ++k) total += (pts[k] - pts[k - 1]).norm();
+    const int n = std::max(1, int(std::ceil(total / spacing - 1e-9)));
+    const double step = total / n;
+    std::size_t seg = 1;
+    double seg_start = 0.0;
+    for (int k = 0; k <= n; ++k) {
+        const double s = k * step;
+        while (seg + 1 < pts.size() && s > seg_start + (pts[seg] - pts[seg - 1]).norm()) {
+            seg_start += (pts[seg] - pts[seg - 1]).norm();
+            ++seg;
+        }
+        const Vec2 a = pts[seg - 1], b = pts[seg];
+        const double len = (b - a).norm();
+        const double u = len > 0.0 ? std::clamp((s - seg_start) / len, 0.0, 1.0) : 0.0;
+        const Vec2 p = a + u * (b - a);
+        out.push_back({p, d});
+        if (mirror) out.push_back({Vec2(-p.x(), p.y()), d});
+    }
+}
+
+}  // namespace
+
+double inner_half_width(const HopperGeometry& g, double y) {
+    // Centre line of the right funnel wall: through (D/2 + d_w/2, 0) at angle theta; the inner
+    // surface is offset by d_w/2 towards the material. Horizontal distance at height y.
+    const double s = std::sin(g.theta), c = std::cos(g.theta);
+    const double centre_x = g.outlet / 2 + g.wall_diameter / 2;
+    if (is_slot(g)) return centre_x - g.wall_diameter / 2;
+    double funnel;
+    if (s < 1e-12) {
+        funnel = (y >= g.wall_diameter / 2) ? 1e300 : centre_x - g.wall_diameter / 2;
+    } else {
+        // Points on the inner surface satisfy (p - P0).n_in = d_w/2, n_in = (-sin, cos).
+        funnel = centre_x + (y * c - g.wall_diameter / 2) / s;
+    }
+    return std::min(funnel, g.width / 2);
+}
+
+SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
+    const auto& g = p.hopper;
+    const auto& ps = p.particles;
+    const double dw = g.wall_diameter;
+    const double spacing = g.wall_spacing * dw;
+    const double gap = p.protocol.fill_gap * ps.d_large;
+    const double a = ps.d_large + gap;  // lattice spacing
+    const bool slot = is_slot(g);
+    const double s = std::sin(g.theta), c = std::cos(g.theta);
+    const double x0 = g.outlet / 2 + dw / 2;  // centre line of the right funnel wall at y = 0
+    const double side_x = g.width / 2 + dw / 2;
+
+    SceneLayout layout;
+    layout.funnel_height = slot ? 1e300 : (g.width - g.outlet) / 2 * std::tan(g.theta);
+
+    // Fill: a square lattice, row by row from the gate up. A site is allowed when a large disk
+    // centred there keeps `gap` clear of every wall particle whatever its position on the wall's
+    // centre line: distance to the centre line >= d_w/2 + d_large/2 + gap.
+    const double clear = dw / 2 + ps.d_large / 2 + gap;
+    const long max_rows = 10'000'000;
+    long row = 0;
+    int placed = 0;
+    layout.fill.reserve(ps.count);
+    while (placed < ps.count) {
+        if (row > max_rows) {
+            std::ostringstream msg;
+            msg << "cannot place " << ps.count << " particles in the hopper (outlet " << g.outlet
+                << " m, theta " << g.theta / core::deg << " deg): the container is narrower than "
+                << "one particle plus its clearance; widen the outlet or change theta";
+            throw core::ConfigError(msg.str());
+        }
+        const double y = clear + row * a;
+        // Largest |x| allowed by the funnel wall: (u - x0)(-sin) + y cos >= clear.
+        double umax = s > 1e-12 ? x0 + (y * c - clear) / s : 1e300;
+        if (!slot) umax = std::min(umax, side_x - clear);
+        ++row;
+        if (umax < 0.0) continue;
+        const int n_row = int(std::floor(2.0 * umax / a + 1e-9)) + 1;
+        const double first = -(n_row - 1) * a / 2;
+        for (int k = 0; k < n_row && placed < ps.count; ++k, ++placed) {
+            FillParticle f;
+            f.pos = Vec2(first + k * a, y);
+            f.large = !(rng.uniform() < ps.small_fraction);
+            f.diameter = f.large ? ps.d_large : ps.d_small;
+            const double vx = rng.uniform(-p.protocol.fill_speed, p.protocol.fill_speed);
+            const double vy = rng.uniform(-p.protocol.fill_speed, p.protocol.fill_speed);
+            f.vel = Vec2(vx, vy);
+            layout.fill.push_back(f);
+            layout.fill_top = std::max(layout.fill_top, y);
+        }
+    }
+    layout.wall_top = layout.fill_top + 3.0 * ps.d_large;
+
+    // Walls: funnel (truncated at wall_top) then the vertical side wall, each side.
+    std::vector<Vec2> outline{Vec2(x0, 0.0)};
+    if (slot) {
+        outline.emplace_back(x0, layout.wall_top);
+    } else if (layout.funnel_height >= layout.wall_top) {
+        outline.emplace_back(x0 + layout.wall_top * c / s, layout.wall_top);
+    } else {
+        outline.emplace_back(side_x, layout.funnel_height);
+        outline.emplace_back(side_x, layout.wall_top);
+    }
+    place_along(outline, spacing, dw, /*mirror=*/true, layout.walls);
+
+    // Gate: a row across the outlet between the two innermost wall particles.
+    const int n_gate = std::max(1, int(std::ceil(2 * x0 / spacing - 1e-9)));
+    for (int k = 1; k < n_gate; ++k)
+        layout.gate.push_back({Vec2(-x0 + k * 2 * x0 / n_gate, 0.0), dw});
+    return layout;
+}
+
+}  // namespace hopper::engine

@@ -1,0 +1,831 @@
+#include "hopper/engine/system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "hopper/core/error.hpp"
+
+namespace hopper::engine {
+
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+}
+
+// Gear 5-value predictor-corrector for second-order equations (Allen & Tildesley, appendix E):
+// corrector coefficients for r, dt v, dt^2/2 a, dt^3/6 b, dt^4/24 c.
+constexpr double gear_c0 = 19.0 / 120.0;
+constexpr double gear_c1 = 3.0 / 4.0;
+constexpr double gear_c3 = 1.0 / 2.0;
+constexpr double gear_c4 = 1.0 / 12.0;
+
+template <class T>
+void permute(std::vector<T>& col, const std::vector<int>& order, std::vector<T>& scratch) {
+    if (col.empty()) return;
+    scratch.resize(col.size());
+    for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = col[order[k]];
+    col.swap(scratch);
+}
+
+template <class T>
+void compact(std::vector<T>& col, const std::vector<int>& keep) {
+    if (col.empty()) return;
+    for (std::size_t k = 0; k < keep.size(); ++k) col[k] = col[keep[k]];
+    col.resize(keep.size());
+}
+
+}  // namespace
+
+// The kernel chosen at setup: one contact law and one integrator, so that the hot loops contain
+// no configuration branches and no per-contact virtual calls (one virtual call per phase).
+struct System::Kernel {
+    virtual ~Kernel() = default;
+    // Advances positions; returns the largest squared displacement since the last rebuild
+    // (NaN when the state is not finite).
+    virtual double predict(System& s) = 0;
+    // Computes forces and torques; returns the largest overlap of this evaluation.
+    virtual double forces(System& s) = 0;
+    virtual void correct(System& s) = 0;
+    // Initialises the integrator's history from the current forces.
+    virtual void prime(System& s) = 0;
+};
+
+template <class Law, Scheme S>
+struct KernelImpl final : System::Kernel {
+    static constexpr bool rot = Law::has_tangential;
+
+    double predict(System& s) override {
+        const std::size_t n = s.x_.size();
+        const double dt = s.config_.dt;
+        double* x = s.x_.data();
+        double* y = s.y_.data();
+        double* vx = s.vx_.data();
+        double* vy = s.vy_.data();
+        double* w = s.w_.data();
+        const double* xr = s.xref_.data();
+        const double* yr = s.yref_.data();
+        double maxd2 = 0.0;
+        if constexpr (S == Scheme::gear4) {
+            // Taylor predictor (Pascal triangle) on the scaled derivatives.
+            const double inv_dt = 1.0 / dt;
+            double* x2 = s.x2_.data();
+            double* x3 = s.x3_.data();
+            double* x4 = s.x4_.data();
+            double* y2 = s.y2_.data();
+            double* y3 = s.y3_.data();
+            double* y4 = s.y4_.data();
+            for (std::size_t i = 0; i < n; ++i) {
+                x[i] += dt * vx[i] + x2[i] + x3[i] + x4[i];
+                vx[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
+                x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
+                x3[i] += 4.0 * x4[i];
+                y[i] += dt * vy[i] + y2[i] + y3[i] + y4[i];
+                vy[i] += (2.0 * y2[i] + 3.0 * y3[i] + 4.0 * y4[i]) * inv_dt;
+                y2[i] += 3.0 * y3[i] + 6.0 * y4[i];
+                y3[i] += 4.0 * y4[i];
+                const double dx = x[i] - xr[i], dy = y[i] - yr[i];
+                const double d2 = dx * dx + dy * dy;
+                maxd2 = (d2 > maxd2 || d2 != d2) ? d2 : maxd2;  // keeps a NaN
+            }
+            if constexpr (rot) {
+                double* w2 = s.w2_.data();
+                double* w3 = s.w3_.data();
+                double* w4 = s.w4_.data();
+                for (std::size_t i = 0; i < n; ++i) {
+                    w[i] += (2.0 * w2[i] + 3.0 * w3[i] + 4.0 * w4[i]) * inv_dt;
+                    w2[i] += 3.0 * w3[i] + 6.0 * w4[i];
+                    w3[i] += 4.0 * w4[i];
+                }
+            }
+        } else {
+            // Velocity Verlet: half kick with the last forces, then drift.
+            const double hdt = 0.5 * dt;
+            const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+            const double* fx = s.fx_.data();
+            const double* fy = s.fy_.data();
+            const double* im = s.inv_m_.data();
+            for (std::size_t i = 0; i < n; ++i) {
+                vx[i] += hdt * (fx[i] * im[i] + gx);
+                vy[i] += hdt * (fy[i] * im[i] + gy);
+                x[i] += dt * vx[i];
+                y[i] += dt * vy[i];
+                const double dx = x[i] - xr[i], dy = y[i] - yr[i];
+                const double d2 = dx * dx + dy * dy;
+                maxd2 = (d2 > maxd2 || d2 != d2) ? d2 : maxd2;
+            }
+            if constexpr (rot) {
+                const double* tq = s.tq_.data();
+                const double* iI = s.inv_I_.data();
+                for (std::size_t i = 0; i < n; ++i) w[i] += hdt * tq[i] * iI[i];
+            }
+        }
+        return maxd2;
+    }
+
+    void correct(System& s) override {
+        const std::size_t n = s.x_.size();
+        const double dt = s.config_.dt;
+        const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+        double* vx = s.vx_.data();
+        double* vy = s.vy_.data();
+        double* w = s.w_.data();
+        const double* fx = s.fx_.data();
+        const double* fy = s.fy_.data();
+        const double* tq = s.tq_.data();
+        const double* im = s.inv_m_.data();
+        const double* iI = s.inv_I_.data();
+        if constexpr (S == Scheme::gear4) {
+            // Corrector: delta = dt^2/2 a(t+dt) - predicted scaled acceleration.
+            const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
+            double* x = s.x_.data();
+            double* y = s.y_.data();
+            double* x2 = s.x2_.data();
+            double* x3 = s.x3_.data();
+            double* x4 = s.x4_.data();
+            double* y2 = s.y2_.data();
+            double* y3 = s.y3_.data();
+            double* y4 = s.y4_.data();
+            for (std::size_t i = 0; i < n; ++i) {
+                const double ex = h * (fx[i] * im[i] + gx) - x2[i];
+                x[i] += gear_c0 * ex;
+                vx[i] += gear_c1 * ex * inv_dt;
+                x2[i] += ex;
+                x3[i] += gear_c3 * ex;
+                x4[i] += gear_c4 * ex;
+                const double ey = h * (fy[i] * im[i] + gy) - y2[i];
+                y[i] += gear_c0 * ey;
+                vy[i] += gear_c1 * ey * inv_dt;
+                y2[i] += ey;
+                y3[i] += gear_c3 * ey;
+                y4[i] += gear_c4 * ey;
+            }
+            if constexpr (rot) {
+                double* w2 = s.w2_.data();
+                double* w3 = s.w3_.data();
+                double* w4 = s.w4_.data();
+                for (std::size_t i = 0; i < n; ++i) {
+                    const double e = h * tq[i] * iI[i] - w2[i];
+                    w[i] += gear_c1 * e * inv_dt;
+                    w2[i] += e;
+                    w3[i] += gear_c3 * e;
+                    w4[i] += gear_c4 * e;
+                }
+            }
+        } else {
+            const double hdt = 0.5 * dt;
+            for (std::size_t i = 0; i < n; ++i) {
+                vx[i] += hdt * (fx[i] * im[i] + gx);
+                vy[i] += hdt * (fy[i] * im[i] + gy);
+            }
+            if constexpr (rot) {
+                for (std::size_t i = 0; i < n; ++i) w[i] += hdt * tq[i] * iI[i];
+            }
+        }
+    }
+
+    void prime(System& s) override {
+        if constexpr (S == Scheme::gear4) {
+            const std::size_t n = s.x_.size();
+            const double h = 0.5 * s.config_.dt * s.config_.dt;
+            const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+            for (auto* col : {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_,
+                              &s.w4_})
+                col->assign(n, 0.0);
+            for (std::size_t i = 0; i < n; ++i) {
+                s.x2_[i] = h * (s.fx_[i] * s.inv_m_[i] + gx);
+                s.y2_[i] = h * (s.fy_[i] * s.inv_m_[i] + gy);
+                if constexpr (rot) s.w2_[i] = h * s.tq_[i] * s.inv_I_[i];
+            }
+        }
+    }
+
+    double forces(System& s) override {
+        const std::size_t n = s.x_.size();
+        const double dt = s.config_.dt;
+        const double* x = s.x_.data();
+        const double* y = s.y_.data();
+        const double* vx = s.vx_.data();
+        const double* vy = s.vy_.data();
+        const double* w = s.w_.data();
+        const double* r = s.r_.data();
+        const double* m = s.m_.data();
+        double* fx = s.fx_.data();
+        double* fy = s.fy_.data();
+        double* tq = s.tq_.data();
+        std::fill(s.fx_.begin(), s.fx_.end(), 0.0);
+        std::fill(s.fy_.begin(), s.fy_.end(), 0.0);
+        if constexpr (rot) std::fill(s.tq_.begin(), s.tq_.end(), 0.0);
+        const int* ps = s.pstart_.data();
+        const int* pj = s.pj_.data();
+        double* hx = s.pxi_x_.data();
+        double* hy = s.pxi_y_.data();
+        const ContactParams pp = s.config_.particle;
+        double max_ov = 0.0;
+        int contacts = 0;
+
+        // Mobile-mobile pairs: each pair once, Newton's third law.
+        for (std::size_t i = 0; i < n; ++i) {
+            const double xi = x[i], yi = y[i], ri = r[i], mi = m[i];
+            const Vec2 vi(vx[i], vy[i]);
+            const double wi = rot ? w[i] : 0.0;
+            double fxi = 0.0, fyi = 0.0, tqi = 0.0;
+            for (int k = ps[i]; k < ps[i + 1]; ++k) {
+                const int j = pj[k];
+                const double dx = xi - x[j], dy = yi - y[j];
+                const double rs = ri + r[j];
+                const double d2 = dx * dx + dy * dy;
+                if (d2 >= rs * rs) {
+                    if constexpr (Law::has_history) hx[k] = hy[k] = 0.0;  // contact opened
+                    continue;
+                }
+                const double d = std::sqrt(d2);
+                const Vec2 nrm(dx / d, dy / d);
+                const double overlap = rs - d;
+                const double mbar = mi * m[j] / (mi + m[j]);
+                const Vec2 vj(vx[j], vy[j]);
+                const Vec2 vij = rot ? contact_velocity(vi, vj, ri, wi, r[j], w[j], nrm)
+                                     : Vec2(vi - vj);
+                Vec2 spring = Law::has_history ? Vec2(hx[k], hy[k]) : Vec2::Zero();
+                const ContactForce cf = Law::evaluate(pp, mbar, nrm, overlap, vij, spring, dt);
+                if constexpr (Law::has_history) {
+                    hx[k] = spring.x();
+                    hy[k] = spring.y();
+                }
+                const Vec2 F = cf.normal + cf.tangential;
+                fxi += F.x();
+                fyi += F.y();
+                fx[j] -= F.x();
+                fy[j] -= F.y();
+                if constexpr (rot) {
+                    const double c = core::cross(nrm, cf.tangential);
+                    tqi -= ri * c;    // -R_i (n x F_t)
+                    tq[j] -= r[j] * c;  // -R_j (n x F_t): the same form for the partner
+                }
+                max_ov = std::max(max_ov, overlap);
+                ++contacts;
+            }
+            fx[i] += fxi;
+            fy[i] += fyi;
+            if constexpr (rot) tq[i] += tqi;
+        }
+
+        // Mobile-wall pairs: walls are immobile (or move rigidly while shaking), mbar = m_i.
+        const int* ws = s.wstart_.data();
+        const int* wj = s.wj_.data();
+        const double* wx = s.wx_.data();
+        const double* wy = s.wy_.data();
+        const double* wr = s.wr_.data();
+        double* gx = s.wxi_x_.data();
+        double* gy = s.wxi_y_.data();
+        const ContactParams pw = s.config_.wall;
+        const double ox = s.wall_offset_.x(), oy = s.wall_offset_.y();
+        const Vec2 vw = s.wall_velocity_;
+        double wfx = 0.0, wfy = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (ws[i] == ws[i + 1]) continue;
+            const double xi = x[i], yi = y[i], ri = r[i], mi = m[i];
+            const Vec2 vi(vx[i], vy[i]);
+            const double wi = rot ? w[i] : 0.0;
+            double fxi = 0.0, fyi = 0.0, tqi = 0.0;
+            for (int k = ws[i]; k < ws[i + 1]; ++k) {
+                const int j = wj[k];
+                const double dx = xi - (wx[j] + ox), dy = yi - (wy[j] + oy);
+                const double rs = ri + wr[j];
+                const double d2 = dx * dx + dy * dy;
+                if (d2 >= rs * rs) {
+                    if constexpr (Law::has_history) gx[k] = gy[k] = 0.0;
+                    continue;
+                }
+                const double d = std::sqrt(d2);
+                const Vec2 nrm(dx / d, dy / d);
+                const double overlap = rs - d;
+                const Vec2 vij = rot ? contact_velocity(vi, vw, ri, wi, wr[j], 0.0, nrm)
+                                     : Vec2(vi - vw);
+                Vec2 spring = Law::has_history ? Vec2(gx[k], gy[k]) : Vec2::Zero();
+                const ContactForce cf = Law::evaluate(pw, mi, nrm, overlap, vij, spring, dt);
+                if constexpr (Law::has_history) {
+                    gx[k] = spring.x();
+                    gy[k] = spring.y();
+                }
+                const Vec2 F = cf.normal + cf.tangential;
+                fxi += F.x();
+                fyi += F.y();
+                if constexpr (rot) tqi -= ri * core::cross(nrm, cf.tangential);
+                max_ov = std::max(max_ov, overlap);
+                ++contacts;
+            }
+            fx[i] += fxi;
+            fy[i] += fyi;
+            wfx -= fxi;
+            wfy -= fyi;
+            if constexpr (rot) tq[i] += tqi;
+        }
+        s.wall_force_ = Vec2(wfx, wfy);
+        s.contacts_ = contacts;
+        return max_ov;
+    }
+};
+
+namespace {
+
+template <class Law>
+std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme) {
+    if (scheme == Scheme::gear4) return std::make_unique<KernelImpl<Law, Scheme::gear4>>();
+    return std::make_unique<KernelImpl<Law, Scheme::verlet>>();
+}
+
+}  // namespace
+
+System::System(const SystemConfig& config) : config_(config) {
+    if (!(config_.dt > 0.0) || !std::isfinite(config_.dt))
+        throw core::ConfigError("System: time step dt must be positive and finite");
+    if (!(config_.skin > 0.0) || !std::isfinite(config_.skin))
+        throw core::ConfigError("System: neighbour skin must be positive and finite");
+    const bool friction = config_.particle.mu > 0.0 || config_.wall.mu > 0.0;
+    const bool spring = config_.particle.k_t > 0.0 || config_.wall.k_t > 0.0;
+    // One-time dispatch (style.md): frictionless contacts exert no torque, so rotation is not
+    // integrated at all; k_t = 0 needs no spring history.
+    rotation_ = friction;
+    history_ = friction && spring;
+    if (!friction)
+        kernel_ = make_kernel_for<FrictionlessLaw>(config_.scheme);
+    else if (!spring)
+        kernel_ = make_kernel_for<ViscousFrictionLaw>(config_.scheme);
+    else
+        kernel_ = make_kernel_for<SpringFrictionLaw>(config_.scheme);
+}
+
+System::~System() = default;
+
+int System::add_particle(const Vec2& pos, double diameter, double mass, double inertia,
+                         const Vec2& vel, double omega) {
+    if (!(diameter > 0.0 && mass > 0.0 && inertia > 0.0) || !pos.allFinite() || !vel.allFinite())
+        throw core::ConfigError("System::add_particle: diameter, mass and inertia must be positive "
+                                "and position and velocity finite");
+    x_.push_back(pos.x());
+    y_.push_back(pos.y());
+    vx_.push_back(vel.x());
+    vy_.push_back(vel.y());
+    w_.push_back(rotation_ ? omega : 0.0);
+    fx_.push_back(0.0);
+    fy_.push_back(0.0);
+    tq_.push_back(0.0);
+    r_.push_back(0.5 * diameter);
+    m_.push_back(mass);
+    inv_m_.push_back(1.0 / mass);
+    inv_I_.push_back(1.0 / inertia);
+    id_.push_back(next_id_);
+    ready_ = false;  // the integrator's history is (re)initialised at the next step
+    need_rebuild_ = true;
+    return next_id_++;
+}
+
+int System::add_wall(const Vec2& pos, double diameter) {
+    if (!(diameter > 0.0) || !pos.allFinite())
+        throw core::ConfigError("System::add_wall: diameter must be positive, position finite");
+    wx_.push_back(pos.x() - wall_offset_.x());
+    wy_.push_back(pos.y() - wall_offset_.y());
+    wr_.push_back(0.5 * diameter);
+    wid_.push_back(next_id_);
+    walls_changed_ = true;
+    need_rebuild_ = true;
+    return next_id_++;
+}
+
+void System::remove_walls(std::span<const int> ids) {
+    if (ids.empty()) return;
+    save_history();  // wall indices change: carry springs over by id
+    history_saved_ = true;
+    std::vector<int> keep;
+    keep.reserve(wid_.size());
+    for (std::size_t k = 0; k < wid_.size(); ++k)
+        if (std::find(ids.begin(), ids.end(), wid_[k]) == ids.end()) keep.push_back(int(k));
+    compact(wx_, keep);
+    compact(wy_, keep);
+    compact(wr_, keep);
+    compact(wid_, keep);
+    walls_changed_ = true;
+    rebuild();
+}
+
+void System::set_wall_motion(const Vec2& offset, const Vec2& velocity) {
+    wall_offset_ = offset;
+    wall_velocity_ = velocity;
+}
+
+void System::set_removal_floor(double y) { removal_floor_ = y; }
+
+void System::flush_removals() {
+    if (!ready_) return;
+    rebuild();
+}
+
+std::vector<Removal> System::take_removals() {
+    std::vector<Removal> out;
+    out.swap(removals_);
+    return out;
+}
+
+void System::set_velocity(int index, const Vec2& v, double omega) {
+    vx_[index] = v.x();
+    vy_[index] = v.y();
+    w_[index] = rotation_ ? omega : 0.0;
+}
+
+int System::index_of(int id) const {
+    for (std::size_t k = 0; k < id_.size(); ++k)
+        if (id_[k] == id) return int(k);
+    return -1;
+}
+
+void System::ensure_ready() {
+    if (ready_) return;
+    // The integrator's history is rebuilt by prime() below.
+    for (auto* col : {&x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_}) col->clear();
+    rebuild();
+    const double ov = kernel_->forces(*this);
+    check_overlap(ov);
+    kernel_->prime(*this);
+    ready_ = true;
+}
+
+void System::step() {
+    ensure_ready();
+    const auto t0 = Clock::now();
+    const double maxd2 = kernel_->predict(*this);
+    const auto t1 = Clock::now();
+    if (!(maxd2 <= std::numeric_limits<double>::max())) fail_nonfinite();
+    const double dmax =
+        std::max(std::sqrt(maxd2), (wall_offset_ - wall_offset_ref_).norm());
+    if (need_rebuild_ || 2.0 * dmax > config_.skin) rebuild();
+    const auto t2 = Clock::now();
+    const double ov = kernel_->forces(*this);
+    const auto t3 = Clock::now();
+    kernel_->correct(*this);
+    const auto t4 = Clock::now();
+    time_ += config_.dt;
+    check_overlap(ov);
+    phase_.integration += seconds_between(t0, t1) + seconds_between(t3, t4);
+    phase_.neighbors += seconds_between(t1, t2);
+    phase_.forces += seconds_between(t2, t3);
+}
+
+void System::run(std::int64_t steps) {
+    for (std::int64_t k = 0; k < steps; ++k) step();
+}
+
+void System::check_overlap(double step_max_overlap) {
+    max_overlap_seen_ = std::max(max_overlap_seen_, step_max_overlap);
+    if (config_.max_overlap > 0.0 && step_max_overlap > config_.max_overlap) {
+        std::ostringstream msg;
+        msg << "overlap of " << step_max_overlap << " m exceeds the allowed " << config_.max_overlap
+            << " m at t = " << time_ << " s (dt = " << config_.dt
+            << " s): the time step is too large for this stiffness and impact speed; use a "
+               "smaller time step";
+        throw core::SimulationError(msg.str());
+    }
+}
+
+void System::fail_nonfinite() const {
+    std::ostringstream msg;
+    msg << "particle state became non-finite (NaN or infinite) at t = " << time_
+        << " s (dt = " << config_.dt
+        << " s): the integration is unstable; use a smaller time step or check the material "
+           "parameters";
+    throw core::SimulationError(msg.str());
+}
+
+// ----- neighbour list ------------------------------------------------------------------------
+
+void System::rebuild() {
+    if (!history_saved_) save_history();
+    history_saved_ = false;
+    remove_below_floor();
+    r_max_ = 0.0;
+    for (double r : r_) r_max_ = std::max(r_max_, r);
+    wr_max_ = 0.0;
+    for (double r : wr_) wr_max_ = std::max(wr_max_, r);
+    const double cutoff = 2.0 * r_max_ + config_.skin;
+    const double wcutoff = r_max_ + wr_max_ + config_.skin;
+    if (walls_changed_ || wcutoff > wcell_size_) build_wall_grid(wcutoff);
+    permute_by_cell(cutoff);
+    build_pairs();
+    restore_history();
+    xref_ = x_;
+    yref_ = y_;
+    wall_offset_ref_ = wall_offset_;
+    need_rebuild_ = false;
+    ++rebuilds_;
+}
+
+void System::remove_below_floor() {
+    std::vector<int>& keep = iscratch_;
+    keep.clear();
+    for (std::size_t i = 0; i < y_.size(); ++i) {
+        if (y_[i] < removal_floor_)
+            removals_.push_back({id_[i], time_});
+        else
+            keep.push_back(int(i));
+    }
+    if (keep.size() == y_.size()) return;
+    for (auto* col : {&x_, &y_, &vx_, &vy_, &w_, &fx_, &fy_, &tq_, &r_, &m_, &inv_m_, &inv_I_,
+                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+        compact(*col, keep);
+    compact(id_, keep);
+}
+
+void System::build_wall_grid(double cutoff) {
+    const std::size_t nw = wx_.size();
+    wcell_size_ = cutoff;
+    if (nw == 0) {
+        wgrid_nx_ = wgrid_ny_ = 1;
+        wgrid_x0_ = wgrid_y0_ = 0.0;
+        wcell_start_.assign(2, 0);
+        wcell_items_.clear();
+        walls_changed_ = false;
+        return;
+    }
+    double x0 = wx_[0], x1 = wx_[0], y0 = wy_[0], y1 = wy_[0];
+    for (std::size_t k = 0; k < nw; ++k) {
+        x0 = std::min(x0, wx_[k]);
+        x1 = std::max(x1, wx_[k]);
+        y0 = std::min(y0, wy_[k]);
+        y1 = std::max(y1, wy_[k]);
+    }
+    wgrid_x0_ = x0 - cutoff;
+    wgrid_y0_ = y0 - cutoff;
+    wgrid_nx_ = std::max(1, int(std::ceil((x1 - x0 + 2 * cutoff) / cutoff)));
+    wgrid_ny_ = std::max(1, int(std::ceil((y1 - y0 + 2 * cutoff) / cutoff)));
+    const int ncell = wgrid_nx_ * wgrid_ny_;
+    std::vector<int> cell(nw);
+    wcell_start_.assign(ncell + 1, 0);
+    for (std::size_t k = 0; k < nw; ++k) {
+        const int cx = std::clamp(int((wx_[k] - wgrid_x0_) / cutoff), 0, wgrid_nx_ - 1);
+        const int cy = std::clamp(int((wy_[k] - wgrid_y0_) / cutoff), 0, wgrid_ny_ - 1);
+        cell[k] = cx + cy * wgrid_nx_;
+        ++wcell_start_[cell[k] + 1];
+    }
+    for (int c = 0; c < ncell; ++c) wcell_start_[c + 1] += wcell_start_[c];
+    wcell_items_.assign(nw, 0);
+    std::vector<int> fill(wcell_start_.begin(), wcell_start_.end() - 1);
+    for (std::size_t k = 0; k < nw; ++k) wcell_items_[fill[cell[k]]++] = int(k);
+    walls_changed_ = false;
+}
+
+void System::permute_by_cell(double cutoff) {
+    const std::size_t n = x_.size();
+    if (n == 0) {
+        cell_start_.assign(2, 0);
+        grid_nx_ = grid_ny_ = 1;
+        return;
+    }
+    // Grid over the particles and walls; clamping outliers into the border cells keeps the
+    // search correct (clamping never separates two cells' neighbours), only slower for them.
+    double x0 = x_[0], x1 = x_[0], y0 = y_[0], y1 = y_[0];
+    for (std::size_t i = 0; i < n; ++i) {
+        x0 = std::min(x0, x_[i]);
+        x1 = std::max(x1, x_[i]);
+        y0 = std::min(y0, y_[i]);
+        y1 = std::max(y1, y_[i]);
+    }
+    if (!wx_.empty()) {
+        // Keep the grid to the hopper's extent (plus a margin) even if a particle flew away.
+        const double m = 4.0 * cutoff;
+        const double wx0 = wgrid_x0_ + wall_offset_.x() - m;
+        const double wy0 = wgrid_y0_ + wall_offset_.y() - m;
+        const double wx1 = wx0 + wgrid_nx_ * wcell_size_ + 2 * m;
+        const double wy1 = wy0 + wgrid_ny_ * wcell_size_ + 2 * m;
+        x0 = std::max(std::min(x0, wx0 + m), wx0);
+        y0 = std::max(std::min(y0, wy0 + m), wy0);
+        x1 = std::min(std::max(x1, wx1 - m), wx1);
+        y1 = std::min(std::max(y1, wy1 - m), wy1);
+    }
+    double cs = cutoff;
+    const double max_cells = 4.0 * double(n + wx_.size()) + 1024.0;
+    while (((x1 - x0) / cs + 1) * ((y1 - y0) / cs + 1) > max_cells) cs *= 1.5;
+    cell_size_ = cs;
+    grid_x0_ = x0;
+    grid_y0_ = y0;
+    grid_nx_ = std::max(1, int((x1 - x0) / cs) + 1);
+    grid_ny_ = std::max(1, int((y1 - y0) / cs) + 1);
+    const int ncell = grid_nx_ * grid_ny_;
+    cell_of_.resize(n);
+    cell_start_.assign(ncell + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const int cx = std::clamp(int((x_[i] - x0) / cs), 0, grid_nx_ - 1);
+        const int cy = std::clamp(int((y_[i] - y0) / cs), 0, grid_ny_ - 1);
+        cell_of_[i] = cx + cy * grid_nx_;
+        ++cell_start_[cell_of_[i] + 1];
+    }
+    for (int c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+    // Counting sort: order_[new index] = old index.
+    order_.resize(n);
+    std::vector<int>& fill = iscratch_;
+    fill.assign(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) order_[fill[cell_of_[i]]++] = int(i);
+    for (auto* col : {&x_, &y_, &vx_, &vy_, &w_, &fx_, &fy_, &tq_, &r_, &m_, &inv_m_, &inv_I_,
+                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+        permute(*col, order_, scratch_);
+    permute(id_, order_, iscratch_);
+    // cell_of_ in the new order is non-decreasing; rebuild it from the starts.
+    for (int c = 0; c < ncell; ++c)
+        for (int i = cell_start_[c]; i < cell_start_[c + 1]; ++i) cell_of_[i] = c;
+}
+
+void System::build_pairs() {
+    const std::size_t n = x_.size();
+    pstart_.resize(n + 1);
+    wstart_.resize(n + 1);
+    pj_.clear();
+    wj_.clear();
+    const double skin = config_.skin;
+    // Half stencil: own cell (j > i) and four of the eight neighbours.
+    static constexpr int sx[4] = {1, -1, 0, 1};
+    static constexpr int sy[4] = {0, 1, 1, 1};
+    for (std::size_t i = 0; i < n; ++i) {
+        pstart_[i] = int(pj_.size());
+        const double xi = x_[i], yi = y_[i], ri = r_[i];
+        const int c = cell_of_[i];
+        const int cx = c % grid_nx_, cy = c / grid_nx_;
+        auto consider = [&](int j) {
+            const double dx = xi - x_[j], dy = yi - y_[j];
+            const double cut = ri + r_[j] + skin;
+            if (dx * dx + dy * dy < cut * cut) pj_.push_back(j);
+        };
+        for (int j = int(i) + 1; j < cell_start_[c + 1]; ++j) consider(j);
+        for (int s = 0; s < 4; ++s) {
+            const int nx = cx + sx[s], ny = cy + sy[s];
+            if (nx < 0 || nx >= grid_nx_ || ny >= grid_ny_) continue;
+            const int nc = nx + ny * grid_nx_;
+            for (int j = cell_start_[nc]; j < cell_start_[nc + 1]; ++j) consider(j);
+        }
+    }
+    pstart_[n] = int(pj_.size());
+    // Mobile-wall pairs from the wall grid (in the walls' base frame).
+    const double ox = wall_offset_.x(), oy = wall_offset_.y();
+    for (std::size_t i = 0; i < n; ++i) {
+        wstart_[i] = int(wj_.size());
+        if (wx_.empty()) continue;
+        const double qx = x_[i] - ox, qy = y_[i] - oy, ri = r_[i];
+        const int cx = std::clamp(int(std::floor((qx - wgrid_x0_) / wcell_size_)), -1, wgrid_nx_);
+        const int cy = std::clamp(int(std::floor((qy - wgrid_y0_) / wcell_size_)), -1, wgrid_ny_);
+        for (int ny = cy - 1; ny <= cy + 1; ++ny) {
+            if (ny < 0 || ny >= wgrid_ny_) continue;
+            for (int nx = cx - 1; nx <= cx + 1; ++nx) {
+                if (nx < 0 || nx >= wgrid_nx_) continue;
+                const int nc = nx + ny * wgrid_nx_;
+                for (int k = wcell_start_[nc]; k < wcell_start_[nc + 1]; ++k) {
+                    const int j = wcell_items_[k];
+                    const double dx = qx - wx_[j], dy = qy - wy_[j];
+                    const double cut = ri + wr_[j] + skin;
+                    if (dx * dx + dy * dy < cut * cut) wj_.push_back(j);
+                }
+            }
+        }
+    }
+    wstart_[n] = int(wj_.size());
+}
+
+// Contact springs survive rebuilds keyed by the persistent ids of the pair: saved grouped by
+// owner (the smaller id for two mobile particles, the mobile one against a wall), restored by a
+// short scan of the owner's few entries. O(pairs), no sorting, no maps.
+void System::save_history() {
+    hist_start_.assign(next_id_ + 1, 0);
+    hist_partner_.clear();
+    hist_x_.clear();
+    hist_y_.clear();
+    if (!history_ || pstart_.size() != x_.size() + 1) return;
+    const std::size_t n = x_.size();
+    auto each_spring = [&](auto&& fn) {
+        for (std::size_t i = 0; i < n; ++i) {
+            for (int k = pstart_[i]; k < pstart_[i + 1]; ++k)
+                if (pxi_x_[k] != 0.0 || pxi_y_[k] != 0.0) {
+                    const int a = id_[i], b = id_[pj_[k]];
+                    fn(std::min(a, b), std::max(a, b), pxi_x_[k], pxi_y_[k]);
+                }
+            for (int k = wstart_[i]; k < wstart_[i + 1]; ++k)
+                if (wxi_x_[k] != 0.0 || wxi_y_[k] != 0.0)
+                    fn(id_[i], wid_[wj_[k]], wxi_x_[k], wxi_y_[k]);
+        }
+    };
+    each_spring([&](int owner, int, double, double) { ++hist_start_[owner + 1]; });
+    for (int k = 0; k < next_id_; ++k) hist_start_[k + 1] += hist_start_[k];
+    const int total = hist_start_[next_id_];
+    hist_partner_.resize(total);
+    hist_x_.resize(total);
+    hist_y_.resize(total);
+    std::vector<int> fill(hist_start_.begin(), hist_start_.end() - 1);
+    each_spring([&](int owner, int partner, double sx, double sy) {
+        const int at = fill[owner]++;
+        hist_partner_[at] = partner;
+        hist_x_[at] = sx;
+        hist_y_[at] = sy;
+    });
+}
+
+void System::restore_history() {
+    if (!history_) {
+        pxi_x_.clear();
+        pxi_y_.clear();
+        wxi_x_.clear();
+        wxi_y_.clear();
+        return;
+    }
+    pxi_x_.assign(pj_.size(), 0.0);
+    pxi_y_.assign(pj_.size(), 0.0);
+    wxi_x_.assign(wj_.size(), 0.0);
+    wxi_y_.assign(wj_.size(), 0.0);
+    if (hist_partner_.empty()) return;
+    auto lookup = [&](int owner, int partner, double& sx, double& sy) {
+        if (owner + 1 >= int(hist_start_.size())) return;
+        for (int k = hist_start_[owner]; k < hist_start_[owner + 1]; ++k)
+            if (hist_partner_[k] == partner) {
+                sx = hist_x_[k];
+                sy = hist_y_[k];
+                return;
+            }
+    };
+    const std::size_t n = x_.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
+            const int a = id_[i], b = id_[pj_[k]];
+            lookup(std::min(a, b), std::max(a, b), pxi_x_[k], pxi_y_[k]);
+        }
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k)
+            lookup(id_[i], wid_[wj_[k]], wxi_x_[k], wxi_y_[k]);
+    }
+}
+
+// ----- observables ---------------------------------------------------------------------------
+
+double System::kinetic_energy() const {
+    double e = 0.0;
+    for (std::size_t i = 0; i < x_.size(); ++i) {
+        e += 0.5 * m_[i] * (vx_[i] * vx_[i] + vy_[i] * vy_[i]);
+        e += 0.5 * w_[i] * w_[i] / inv_I_[i];
+    }
+    return e;
+}
+
+double System::potential_energy() const {
+    double e = 0.0;
+    for (std::size_t i = 0; i < x_.size(); ++i)
+        e -= m_[i] * (config_.gravity.x() * x_[i] + config_.gravity.y() * y_[i]);
+    return e;
+}
+
+double System::elastic_energy() const {
+    if (pstart_.size() != x_.size() + 1) return 0.0;
+    double e = 0.0;
+    for (std::size_t i = 0; i < x_.size(); ++i) {
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
+            const int j = pj_[k];
+            const double d = std::hypot(x_[i] - x_[j], y_[i] - y_[j]);
+            const double ov = r_[i] + r_[j] - d;
+            if (ov <= 0.0) continue;
+            e += 0.5 * config_.particle.k_n * ov * ov;
+            if (history_)
+                e += 0.5 * config_.particle.k_t * (pxi_x_[k] * pxi_x_[k] + pxi_y_[k] * pxi_y_[k]);
+        }
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
+            const int j = wj_[k];
+            const double d = std::hypot(x_[i] - wx_[j] - wall_offset_.x(),
+                                        y_[i] - wy_[j] - wall_offset_.y());
+            const double ov = r_[i] + wr_[j] - d;
+            if (ov <= 0.0) continue;
+            e += 0.5 * config_.wall.k_n * ov * ov;
+            if (history_)
+                e += 0.5 * config_.wall.k_t * (wxi_x_[k] * wxi_x_[k] + wxi_y_[k] * wxi_y_[k]);
+        }
+    }
+    return e;
+}
+
+std::vector<std::pair<int, int>> System::contacts_from_list() {
+    ensure_ready();
+    std::vector<std::pair<int, int>> out;
+    for (std::size_t i = 0; i < x_.size(); ++i) {
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
+            const int j = pj_[k];
+            const double d2 = (x_[i] - x_[j]) * (x_[i] - x_[j]) + (y_[i] - y_[j]) * (y_[i] - y_[j]);
+            if (d2 < (r_[i] + r_[j]) * (r_[i] + r_[j]))
+                out.emplace_back(std::min(id_[i], id_[j]), std::max(id_[i], id_[j]));
+        }
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
+            const int j = wj_[k];
+            const double dx = x_[i] - wx_[j] - wall_offset_.x();
+            const double dy = y_[i] - wy_[j] - wall_offset_.y();
+            if (dx * dx + dy * dy < (r_[i] + wr_[j]) * (r_[i] + wr_[j]))
+                out.emplace_back(id_[i], wid_[j]);
+        }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace hopper::engine
