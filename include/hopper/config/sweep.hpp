@@ -79,4 +79,14 @@ std::vector<Task> expand_tasks(const CampaignSpec& spec);
 std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<ParamSetting>& settings,
                           int realization);
 
+// Canonical text of one setting, "name=value": numbers in their shortest round-trip form
+// (std::to_chars), strings verbatim, e.g. "D_cm=2.7", "integrator.scheme=verlet". Labels and
+// seeds are built from it.
+std::string to_string(const ParamSetting& setting);
+
+// The canonical names of every scene parameter a [sweep] or [[points]] entry may set, in the
+// order of campaigns/README.md: "D_cm", "theta_deg", then "<section>.<key>" ("hopper.width_cm",
+// "material.mu", ...). For documentation checks and command-line help.
+std::vector<std::string> parameter_names();
+
 }  // namespace hopper::config

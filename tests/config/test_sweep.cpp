@@ -1,0 +1,770 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "hopper/config/sweep.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/core/units.hpp"
+
+using hopper::config::CampaignSpec;
+using hopper::config::derive_seed;
+using hopper::config::expand_tasks;
+using hopper::config::load_sweep;
+using hopper::config::ParamSetting;
+using hopper::config::parse_sweep;
+using hopper::config::Point;
+using hopper::config::scene_at;
+using hopper::config::SweepFile;
+using hopper::config::Task;
+using hopper::core::ConfigError;
+using hopper::core::pi;
+using hopper::engine::Scheme;
+using testing::AllOf;
+using testing::HasSubstr;
+using testing::Not;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path source_dir = HOPPER_SOURCE_DIR;
+
+SweepFile parse(const std::string& text) {
+    return parse_sweep(text, "test.toml");
+}
+
+// The ConfigError message of parsing text, or a marker that makes every HasSubstr fail.
+std::string error_of(const std::string& text, const std::string& name = "bad.toml") {
+    try {
+        parse_sweep(text, name);
+    } catch (const ConfigError& e) {
+        return e.what();
+    }
+    return "<<no error was thrown>>";
+}
+
+std::string load_error_of(const fs::path& path) {
+    try {
+        load_sweep(path);
+    } catch (const ConfigError& e) {
+        return e.what();
+    }
+    return "<<no error was thrown>>";
+}
+
+std::vector<std::string> labels(const CampaignSpec& c) {
+    std::vector<std::string> out;
+    for (const auto& p : c.points)
+        out.push_back(p.label);
+    return out;
+}
+
+// A minimal valid campaign: prepend sections, append points.
+const std::string campaign_head = R"(
+[hopper]
+D_cm = 2.7
+theta_deg = 45
+[campaign]
+name = "t"
+)";
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Shipped campaign files
+
+struct Shipped {
+    const char* file;
+    std::size_t points;
+    std::size_t tasks;
+};
+
+TEST(ShippedCampaigns, ParseWithTheExpectedPointAndTaskCounts) {
+    // Counts from spec/paper-campaigns.md (see the comment at the top of each file).
+    const Shipped files[] = {
+        {"campaigns/tiny.toml", 2, 4},
+        {"campaigns/quickstart.toml", 4, 4},
+        {"campaigns/paper/single-material.toml", 12, 15},  // 12 rows + 3 repeats of one row
+        {"campaigns/paper/large-outlet-material.toml", 8, 8},
+        {"campaigns/paper/survival.toml", 11, 440},
+        {"campaigns/paper/empty-time.toml", 8, 5 * 40 + 3},
+        {"campaigns/paper/beverloo-angle.toml", 40, 40},
+        {"campaigns/paper/discharge-curves.toml", 5, 5},
+        {"campaigns/paper/fields.toml", 2, 2},
+        {"campaigns/paper/controls.toml", 3, 9},
+    };
+    for (const auto& f : files) {
+        SCOPED_TRACE(f.file);
+        const SweepFile s = load_sweep(source_dir / f.file);
+        ASSERT_TRUE(s.has_campaign);
+        EXPECT_EQ(s.campaign.points.size(), f.points);
+        const auto tasks = expand_tasks(s.campaign);
+        EXPECT_EQ(tasks.size(), f.tasks);
+        // The store defaults to <name>.h5 beside the sweep file.
+        EXPECT_EQ(s.campaign.store,
+                  (source_dir / f.file).parent_path() / (s.campaign.name + ".h5"));
+        std::set<std::uint64_t> seeds;
+        for (const auto& t : tasks)
+            seeds.insert(t.seed);
+        EXPECT_EQ(seeds.size(), tasks.size()) << "task seeds must be distinct";
+    }
+}
+
+TEST(ShippedCampaigns, PaperDirectoryHoldsExactlyTheEightStudies) {
+    std::set<std::string> found;
+    for (const auto& e : fs::directory_iterator(source_dir / "campaigns/paper"))
+        if (e.path().extension() == ".toml") found.insert(e.path().filename().string());
+    const std::set<std::string> expected = {
+        "single-material.toml", "large-outlet-material.toml", "survival.toml", "empty-time.toml",
+        "beverloo-angle.toml",  "discharge-curves.toml",      "fields.toml",   "controls.toml"};
+    EXPECT_EQ(found, expected);
+}
+
+TEST(ShippedCampaigns, PaperFilesUseThePublishedFullSizeSetup) {
+    for (const auto& e : fs::directory_iterator(source_dir / "campaigns/paper")) {
+        if (e.path().extension() != ".toml") continue;
+        SCOPED_TRACE(e.path().string());
+        const SweepFile s = load_sweep(e.path());
+        for (const auto& p : s.campaign.points) {
+            EXPECT_EQ(p.scene.particles.count, 8750);
+            EXPECT_DOUBLE_EQ(p.scene.hopper.width, 0.43);
+            ASSERT_TRUE(p.scene.material.collision_time.has_value());
+            EXPECT_DOUBLE_EQ(*p.scene.material.collision_time, 8.0e-4);
+            EXPECT_DOUBLE_EQ(p.scene.integrator.steps_per_collision, 50.0);
+            EXPECT_EQ(p.scene.integrator.scheme, Scheme::gear4);
+            EXPECT_DOUBLE_EQ(p.scene.material.kt_over_kn,
+                             p.label.find("kt_over_kn") == std::string::npos ? 0.8 : 0.0);
+        }
+    }
+}
+
+TEST(ShippedCampaigns, SingleMaterialRowsAreThePublishedOnes) {
+    const SweepFile s = load_sweep(source_dir / "campaigns/paper/single-material.toml");
+    // (system e_n, wall e_n, system mu, wall mu), spec/paper-campaigns.md study 1.
+    const double rows[12][4] = {{0.5, 0.5, 0.5, 0.8}, {0.5, 0.5, 0.6, 0.8}, {0.5, 0.5, 0.7, 0.8},
+                                {0.5, 0.5, 0.8, 0.8}, {0.8, 0.5, 0.5, 0.8}, {0.8, 0.5, 0.6, 0.8},
+                                {0.8, 0.5, 0.7, 0.8}, {0.8, 0.5, 0.8, 0.8}, {0.5, 0.3, 0.8, 0.8},
+                                {0.5, 0.8, 0.8, 0.8}, {0.5, 0.5, 0.8, 0.5}, {0.3, 0.5, 0.8, 0.8}};
+    ASSERT_EQ(s.campaign.points.size(), 12u);
+    for (int i = 0; i < 12; ++i) {
+        SCOPED_TRACE(i);
+        const auto& p = s.campaign.points[i];
+        EXPECT_DOUBLE_EQ(p.scene.hopper.outlet, 0.027);
+        EXPECT_DOUBLE_EQ(p.scene.hopper.theta, pi / 4);
+        EXPECT_EQ(p.scene.material.system.e_n, rows[i][0]);
+        EXPECT_EQ(p.scene.material.wall.e_n, rows[i][1]);
+        EXPECT_EQ(p.scene.material.system.mu, rows[i][2]);
+        EXPECT_EQ(p.scene.material.wall.mu, rows[i][3]);
+        EXPECT_EQ(p.realizations, i == 3 ? 4 : 1);  // the (0.5,0.5,0.8,0.8) row: 1 + 3 repeats
+    }
+}
+
+TEST(ShippedCampaigns, SurvivalAndControlsPoints) {
+    const SweepFile s = load_sweep(source_dir / "campaigns/paper/survival.toml");
+    EXPECT_THAT(labels(s.campaign),
+                testing::ElementsAre(
+                    "D_cm=2.7 theta_deg=15", "D_cm=2.7 theta_deg=30", "D_cm=2.7 theta_deg=45",
+                    "D_cm=2.7 theta_deg=60", "D_cm=2.9 theta_deg=15", "D_cm=2.9 theta_deg=30",
+                    "D_cm=2.9 theta_deg=45", "D_cm=2.9 theta_deg=60", "D_cm=3.1 theta_deg=45",
+                    "D_cm=3.3 theta_deg=45", "D_cm=3.5 theta_deg=45"));
+    for (const auto& p : s.campaign.points) {
+        EXPECT_EQ(p.realizations, 40);
+        EXPECT_EQ(p.scene.material.wall.e_n, 0.5);
+        EXPECT_EQ(p.scene.material.wall.mu, 0.8);
+    }
+
+    const SweepFile c = load_sweep(source_dir / "campaigns/paper/controls.toml");
+    ASSERT_EQ(c.campaign.points.size(), 3u);
+    const auto& no_mu = c.campaign.points[0].scene.material;
+    EXPECT_EQ(no_mu.system.mu, 0.0);
+    EXPECT_EQ(no_mu.wall.mu, 0.0);
+    EXPECT_EQ(c.campaign.points[1].scene.material.kt_over_kn, 0.0);
+    const auto& elastic = c.campaign.points[2].scene.material;
+    EXPECT_EQ(elastic.system.e_n, 1.0);
+    EXPECT_EQ(elastic.wall.e_n, 1.0);
+}
+
+TEST(ShippedCampaigns, ReadmeDocumentsEveryKeyInItsSection) {
+    std::ifstream in(source_dir / "campaigns/README.md");
+    ASSERT_TRUE(in) << "campaigns/README.md is missing";
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const std::string readme = ss.str();
+    auto section_text = [&](const std::string& section) {
+        const auto start = readme.find("## [" + section + "]");
+        if (start == std::string::npos) return std::string();
+        const auto end = readme.find("\n## ", start + 1);
+        return readme.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    };
+    auto names = hopper::config::parameter_names();
+    EXPECT_GE(names.size(), 39u);
+    for (const char* k :
+         {"campaign.name", "campaign.store", "campaign.seed", "campaign.realizations"})
+        names.emplace_back(k);
+    for (const auto& name : names) {
+        const bool top = name == "D_cm" || name == "theta_deg";
+        const std::string section = top ? "hopper" : name.substr(0, name.find('.'));
+        const std::string key = top ? name : name.substr(name.find('.') + 1);
+        EXPECT_THAT(section_text(section), HasSubstr("| `" + key + "` |"))
+            << name << " is not documented in campaigns/README.md";
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Defaults and unit conversion
+
+TEST(SweepParse, EmptyFileGivesThePublishedDefaults) {
+    const SweepFile s = parse("");
+    EXPECT_FALSE(s.has_campaign);
+    const hopper::engine::SceneParams defaults{};
+    EXPECT_EQ(s.base.particles.count, defaults.particles.count);
+    EXPECT_EQ(s.base.hopper.width, defaults.hopper.width);
+    EXPECT_EQ(s.base.material.system.mu, defaults.material.system.mu);
+    EXPECT_EQ(s.base.material.wall.e_n, defaults.material.system.e_n);
+    EXPECT_EQ(s.base.hopper.wall_diameter, defaults.particles.d_large);
+    EXPECT_FALSE(s.base.material.collision_time.has_value());
+    EXPECT_FALSE(s.base.protocol.t_check.has_value());
+    EXPECT_EQ(s.path, fs::path("test.toml"));
+}
+
+TEST(SweepParse, ConvertsFileUnitsToSi) {
+    const SweepFile s = parse(R"(
+[hopper]
+width_cm = 20
+particles = 1000
+small_fraction = 0.5
+d_small_cm = 0.5
+d_large_cm = 0.8
+thickness_cm = 0.4
+density_kg_m3 = 1200
+D_cm = 2.7
+theta_deg = 45
+[material]
+e_n = 0.6
+mu = 0.7
+kt_over_kn = 0.5
+youngs_modulus_pa = 1e7
+poisson_ratio = 0.3
+collision_time_s = 8.0e-4
+[walls]
+spacing = 1.2
+[integrator]
+scheme = "verlet"
+steps_per_collision = 40
+skin = 0.3
+[protocol]
+fill_gap = 0.1
+fill_speed_m_s = 0.02
+settle_ke = 2e-4
+settle_hold_s = 0.1
+settle_max_time_s = 10
+jam_region_height = 1.5
+t_check_s = 0.06
+detector_interval_s = 2e-4
+shake_amplitude = 0.3
+shake_period_s = 0.04
+shake_direction_deg = 45
+max_shakes = 5
+max_time_s = 100
+exit_depth = 5
+empty_threshold = 3
+sample_interval_s = 0.02
+max_overlap = 0.2
+)");
+    const auto& p = s.base;
+    EXPECT_DOUBLE_EQ(p.hopper.width, 0.20);
+    EXPECT_EQ(p.particles.count, 1000);
+    EXPECT_DOUBLE_EQ(p.particles.small_fraction, 0.5);
+    EXPECT_DOUBLE_EQ(p.particles.d_small, 0.005);
+    EXPECT_DOUBLE_EQ(p.particles.d_large, 0.008);
+    EXPECT_DOUBLE_EQ(p.particles.thickness, 0.004);
+    EXPECT_DOUBLE_EQ(p.particles.density, 1200.0);
+    EXPECT_DOUBLE_EQ(p.hopper.outlet, 0.027);
+    EXPECT_DOUBLE_EQ(p.hopper.theta, pi / 4);
+    EXPECT_DOUBLE_EQ(p.material.system.e_n, 0.6);
+    EXPECT_DOUBLE_EQ(p.material.system.mu, 0.7);
+    // Walls default to the particles' material and to wall particles of diameter d_large.
+    EXPECT_DOUBLE_EQ(p.material.wall.e_n, 0.6);
+    EXPECT_DOUBLE_EQ(p.material.wall.mu, 0.7);
+    EXPECT_DOUBLE_EQ(p.hopper.wall_diameter, 0.008);
+    EXPECT_DOUBLE_EQ(p.hopper.wall_spacing, 1.2);
+    EXPECT_DOUBLE_EQ(p.material.kt_over_kn, 0.5);
+    EXPECT_DOUBLE_EQ(p.material.youngs_modulus, 1e7);
+    EXPECT_DOUBLE_EQ(p.material.poisson_ratio, 0.3);
+    EXPECT_DOUBLE_EQ(p.material.collision_time.value_or(-1), 8.0e-4);
+    EXPECT_EQ(p.integrator.scheme, Scheme::verlet);
+    EXPECT_DOUBLE_EQ(p.integrator.steps_per_collision, 40.0);
+    EXPECT_DOUBLE_EQ(p.integrator.skin, 0.3);
+    const auto& pr = p.protocol;
+    EXPECT_DOUBLE_EQ(pr.fill_gap, 0.1);
+    EXPECT_DOUBLE_EQ(pr.fill_speed, 0.02);
+    EXPECT_DOUBLE_EQ(pr.settle_ke, 2e-4);
+    EXPECT_DOUBLE_EQ(pr.settle_hold, 0.1);
+    EXPECT_DOUBLE_EQ(pr.settle_max_time, 10.0);
+    EXPECT_DOUBLE_EQ(pr.jam_region_height, 1.5);
+    EXPECT_DOUBLE_EQ(pr.t_check.value_or(-1), 0.06);
+    EXPECT_DOUBLE_EQ(pr.detector_interval, 2e-4);
+    EXPECT_DOUBLE_EQ(pr.shake_amplitude, 0.3);
+    EXPECT_DOUBLE_EQ(pr.shake_period, 0.04);
+    EXPECT_DOUBLE_EQ(pr.shake_direction, pi / 4);
+    EXPECT_EQ(pr.max_shakes, 5);
+    EXPECT_DOUBLE_EQ(pr.max_time, 100.0);
+    EXPECT_DOUBLE_EQ(pr.exit_depth, 5.0);
+    EXPECT_EQ(pr.empty_threshold, 3);
+    EXPECT_DOUBLE_EQ(pr.sample_interval, 0.02);
+    EXPECT_DOUBLE_EQ(pr.max_overlap, 0.2);
+}
+
+TEST(SweepParse, ExplicitWallValuesAndDiameterOverrideTheDefaults) {
+    const SweepFile s = parse(R"(
+[material]
+e_n = 0.6
+[walls]
+e_n = 0.3
+mu = 0.4
+particle_diameter_cm = 1.0
+)");
+    EXPECT_DOUBLE_EQ(s.base.material.wall.e_n, 0.3);
+    EXPECT_DOUBLE_EQ(s.base.material.wall.mu, 0.4);
+    EXPECT_DOUBLE_EQ(s.base.material.system.mu, 0.8);
+    EXPECT_DOUBLE_EQ(s.base.hopper.wall_diameter, 0.01);
+}
+
+TEST(SweepParse, WallsFollowThePointsMaterialAndDiameterUnlessGiven) {
+    const SweepFile s = parse(campaign_head + R"(
+[sweep]
+material.mu = [0.5]
+hopper.d_large_cm = [0.7, 0.8]
+)");
+    ASSERT_EQ(s.campaign.points.size(), 2u);
+    EXPECT_DOUBLE_EQ(s.campaign.points[0].scene.material.wall.mu, 0.5);
+    EXPECT_DOUBLE_EQ(s.campaign.points[0].scene.hopper.wall_diameter, 0.007);
+    EXPECT_DOUBLE_EQ(s.campaign.points[1].scene.hopper.wall_diameter, 0.008);
+}
+
+TEST(SweepParse, SceneAtSetsOutletAndAngle) {
+    const SweepFile s = load_sweep(source_dir / "campaigns/tiny.toml");
+    const auto p = scene_at(s, 3.3, 30);
+    EXPECT_DOUBLE_EQ(p.hopper.outlet, 0.033);
+    EXPECT_DOUBLE_EQ(p.hopper.theta, pi / 6);
+    EXPECT_EQ(p.particles.count, s.base.particles.count);
+    EXPECT_THAT(
+        [&] {
+            try {
+                scene_at(s, 12.5, 30);
+            } catch (const ConfigError& e) {
+                return std::string(e.what());
+            }
+            return std::string();
+        }(),
+        AllOf(HasSubstr("tiny.toml"), HasSubstr("D_cm = 12.5"), HasSubstr("width_cm")));
+    EXPECT_THROW(scene_at(s, 3.0, 95), ConfigError);
+    EXPECT_THROW(scene_at(s, -1.0, 45), ConfigError);
+    EXPECT_THROW(scene_at(s, std::nan(""), 45), ConfigError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Points, sweeps, labels
+
+TEST(SweepParse, CartesianProductInCanonicalOrderLastAxisFastest) {
+    const SweepFile s = parse(campaign_head + R"(
+[sweep]
+theta_deg = [15, 30]
+material.mu = [0.5, 0.8]
+D_cm = [2.7, 2.9]
+)");
+    EXPECT_THAT(
+        labels(s.campaign),
+        testing::ElementsAre(
+            "D_cm=2.7 theta_deg=15 material.mu=0.5", "D_cm=2.7 theta_deg=15 material.mu=0.8",
+            "D_cm=2.7 theta_deg=30 material.mu=0.5", "D_cm=2.7 theta_deg=30 material.mu=0.8",
+            "D_cm=2.9 theta_deg=15 material.mu=0.5", "D_cm=2.9 theta_deg=15 material.mu=0.8",
+            "D_cm=2.9 theta_deg=30 material.mu=0.5", "D_cm=2.9 theta_deg=30 material.mu=0.8"));
+    const Point& p = s.campaign.points[5];
+    ASSERT_EQ(p.settings.size(), 3u);
+    EXPECT_EQ(p.settings[0].name, "D_cm");
+    EXPECT_EQ(std::get<double>(p.settings[0].value), 2.9);
+    EXPECT_EQ(p.settings[1].name, "theta_deg");
+    EXPECT_EQ(std::get<double>(p.settings[1].value), 15.0);
+    EXPECT_EQ(p.settings[2].name, "material.mu");
+    EXPECT_DOUBLE_EQ(p.scene.hopper.outlet, 0.029);
+    EXPECT_DOUBLE_EQ(p.scene.hopper.theta, 15 * pi / 180);
+    EXPECT_DOUBLE_EQ(p.scene.material.system.mu, 0.8);
+    EXPECT_EQ(p.realizations, 1);
+}
+
+TEST(SweepParse, OtherNamesAreSortedAndStringsAndIntegersPrintCanonically) {
+    const SweepFile s = parse(campaign_head + R"(
+[sweep]
+walls.e_n = [0.5]
+integrator.scheme = ["gear4", "verlet"]
+hopper.particles = [8750]
+material.e_n = [1e-1]
+)");
+    EXPECT_THAT(labels(s.campaign),
+                testing::ElementsAre("D_cm=2.7 theta_deg=45 hopper.particles=8750 "
+                                     "integrator.scheme=gear4 material.e_n=0.1 walls.e_n=0.5",
+                                     "D_cm=2.7 theta_deg=45 hopper.particles=8750 "
+                                     "integrator.scheme=verlet material.e_n=0.1 walls.e_n=0.5"));
+    EXPECT_EQ(std::get<std::string>(s.campaign.points[1].settings[3].value), "verlet");
+    EXPECT_EQ(s.campaign.points[1].scene.integrator.scheme, Scheme::verlet);
+}
+
+TEST(SweepParse, PointsWithInlineTablesFollowTheSweepAndOverrideRealizations) {
+    const SweepFile s = parse(R"(
+[hopper]
+theta_deg = 60
+[campaign]
+name = "mix"
+realizations = 3
+seed = 7
+store = "out/mix.h5"
+[sweep]
+D_cm = [3.0]
+[[points]]
+D_cm = 4.5
+material = { mu = 0.5, e_n = 0.8 }
+walls = { mu = 0.3 }
+realizations = 10
+[[points]]
+D_cm = 4.5
+theta_deg = 30
+integrator = { scheme = "verlet" }
+)");
+    const CampaignSpec& c = s.campaign;
+    EXPECT_EQ(c.name, "mix");
+    EXPECT_EQ(c.seed, 7u);
+    EXPECT_EQ(c.realizations, 3);
+    EXPECT_EQ(c.store, fs::path("out/mix.h5"));  // source "test.toml" has no directory
+    EXPECT_THAT(
+        labels(c),
+        testing::ElementsAre("D_cm=3 theta_deg=60",
+                             "D_cm=4.5 theta_deg=60 material.e_n=0.8 material.mu=0.5 walls.mu=0.3",
+                             "D_cm=4.5 theta_deg=30 integrator.scheme=verlet"));
+    EXPECT_EQ(c.points[0].realizations, 3);
+    EXPECT_EQ(c.points[1].realizations, 10);
+    EXPECT_EQ(c.points[2].realizations, 3);
+    EXPECT_DOUBLE_EQ(c.points[1].scene.material.system.mu, 0.5);
+    EXPECT_DOUBLE_EQ(c.points[1].scene.material.wall.mu, 0.3);
+    EXPECT_DOUBLE_EQ(c.points[1].scene.material.wall.e_n, 0.8);  // follows the point's e_n
+    EXPECT_EQ(c.points[2].scene.integrator.scheme, Scheme::verlet);
+
+    const auto tasks = expand_tasks(c);
+    ASSERT_EQ(tasks.size(), 16u);
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+        EXPECT_EQ(tasks[i].task_id, int(i));
+    EXPECT_EQ(tasks[3].point_index, 1);
+    EXPECT_EQ(tasks[3].realization, 0);
+    EXPECT_EQ(tasks[12].point_index, 1);
+    EXPECT_EQ(tasks[12].realization, 9);
+    EXPECT_EQ(tasks[13].point_index, 2);
+}
+
+TEST(SweepParse, CampaignWithoutPointsRunsTheBaseScene) {
+    const SweepFile s = parse(campaign_head);
+    ASSERT_EQ(s.campaign.points.size(), 1u);
+    EXPECT_EQ(s.campaign.points[0].label, "D_cm=2.7 theta_deg=45");
+    EXPECT_EQ(s.campaign.seed, 1u);  // default seed
+    EXPECT_EQ(s.campaign.store, fs::path("t.h5"));
+}
+
+TEST(SweepParse, RelativeStoreIsResolvedBesideTheSweepFile) {
+    const SweepFile s =
+        parse_sweep(campaign_head + "store = \"../data/x.h5\"\n", "/some/dir/sweep.toml");
+    EXPECT_EQ(s.campaign.store, fs::path("/some/dir/../data/x.h5"));
+    const SweepFile a = parse_sweep(campaign_head + "store = \"/abs/x.h5\"\n", "/some/dir/s.toml");
+    EXPECT_EQ(a.campaign.store, fs::path("/abs/x.h5"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Seeds
+
+TEST(Seeds, DeterministicAndDistinctPerRealizationAndPoint) {
+    const std::vector<ParamSetting> a = {{"D_cm", 2.7}, {"theta_deg", 45.0}};
+    const std::vector<ParamSetting> b = {{"D_cm", 2.9}, {"theta_deg", 45.0}};
+    EXPECT_EQ(derive_seed(1, a, 0), derive_seed(1, a, 0));
+    EXPECT_NE(derive_seed(1, a, 0), derive_seed(1, a, 1));
+    EXPECT_NE(derive_seed(1, a, 0), derive_seed(1, b, 0));
+    EXPECT_NE(derive_seed(1, a, 0), derive_seed(2, a, 0));
+    // A string setting counts too.
+    auto c = a;
+    c.push_back({"integrator.scheme", std::string("verlet")});
+    EXPECT_NE(derive_seed(1, a, 0), derive_seed(1, c, 0));
+    // Depends on the settings, not on the order the caller holds them in.
+    const std::vector<ParamSetting> a_rev = {{"theta_deg", 45.0}, {"D_cm", 2.7}};
+    EXPECT_EQ(derive_seed(1, a, 3), derive_seed(1, a_rev, 3));
+    EXPECT_THROW(derive_seed(1, a, -1), ConfigError);
+}
+
+TEST(Seeds, SameValueWrittenDifferentlyGivesTheSameSeed) {
+    // 45 and 45.0, 2.70 and 2.7 are the same number: same label, same seed.
+    const SweepFile x = parse(campaign_head + "[sweep]\nD_cm = [2.70]\ntheta_deg = [45.0]\n");
+    const SweepFile y = parse(campaign_head + "[sweep]\nD_cm = [2.7]\ntheta_deg = [45]\n");
+    EXPECT_EQ(x.campaign.points[0].label, y.campaign.points[0].label);
+    EXPECT_EQ(expand_tasks(x.campaign)[0].seed, expand_tasks(y.campaign)[0].seed);
+}
+
+TEST(Seeds, AddingPointsOrRealizationsKeepsExistingSeeds) {
+    const SweepFile small = parse(campaign_head + R"(realizations = 2
+[sweep]
+D_cm = [2.7, 2.9]
+)");
+    const SweepFile large = parse(campaign_head + R"(realizations = 5
+[sweep]
+D_cm = [2.5, 2.7, 2.9, 3.1]
+theta_deg = [45]
+[[points]]
+D_cm = 4.0
+)");
+    std::map<std::pair<std::string, int>, std::uint64_t> before;
+    for (const auto& t : expand_tasks(small.campaign))
+        before[{small.campaign.points[t.point_index].label, t.realization}] = t.seed;
+    ASSERT_EQ(before.size(), 4u);
+    int matched = 0;
+    std::set<std::uint64_t> all;
+    for (const auto& t : expand_tasks(large.campaign)) {
+        all.insert(t.seed);
+        const auto it = before.find({large.campaign.points[t.point_index].label, t.realization});
+        if (it == before.end()) continue;
+        EXPECT_EQ(it->second, t.seed);
+        ++matched;
+    }
+    EXPECT_EQ(matched, 4);
+    EXPECT_EQ(all.size(), 5u * 5u);
+}
+
+TEST(Seeds, GoldenValueIsStable) {
+    // Changing derive_seed changes every realization of every campaign: do it only on purpose.
+    const std::vector<ParamSetting> s = {{"D_cm", 2.7}, {"theta_deg", 45.0}};
+    const std::uint64_t golden = derive_seed(1, s, 0);
+    EXPECT_EQ(golden, derive_seed(1, {{"theta_deg", 45.0}, {"D_cm", 2.7}}, 0));
+    EXPECT_EQ(hopper::config::to_string(ParamSetting{"D_cm", 2.7}), "D_cm=2.7");
+    EXPECT_EQ(hopper::config::to_string(ParamSetting{"theta_deg", 45.0}), "theta_deg=45");
+    EXPECT_EQ(golden, 5542539634249134159ULL);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Errors: every message names the file, the key and the value
+
+TEST(SweepErrors, UnknownKeyInSection) {
+    const auto msg = error_of("[material]\nmu = 0.5\nmuu = 0.6\n");
+    EXPECT_THAT(msg, AllOf(HasSubstr("bad.toml:3:1"), HasSubstr("unknown key 'muu'"),
+                           HasSubstr("[material]"), HasSubstr("allowed: e_n, mu"),
+                           HasSubstr("did you mean 'mu'")));
+}
+
+TEST(SweepErrors, UnknownSectionAndTopLevelKey) {
+    EXPECT_THAT(error_of("[materials]\nmu = 0.5\n"),
+                AllOf(HasSubstr("bad.toml"), HasSubstr("unknown section [materials]"),
+                      HasSubstr("did you mean 'material'")));
+    EXPECT_THAT(error_of("D_cm = 2.7\n"),
+                AllOf(HasSubstr("unknown key 'D_cm'"), HasSubstr("top level")));
+}
+
+TEST(SweepErrors, MisspeltKeyInSweep) {
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nmaterail.mu = [0.5, 0.8]\n"),
+                AllOf(HasSubstr("bad.toml"), HasSubstr("unknown key 'materail.mu' in [sweep]"),
+                      HasSubstr("allowed:"), HasSubstr("did you mean 'material.mu'")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nmaterial.muu = [0.5]\n"),
+                AllOf(HasSubstr("unknown key 'material.muu' in [sweep]"),
+                      HasSubstr("allowed in material: e_n, mu")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nD = [2.7]\n"),
+                AllOf(HasSubstr("unknown key 'D' in [sweep]"), HasSubstr("D_cm")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nhopper.D_cm = [2.7]\n"),
+                HasSubstr("directly in [sweep]"));
+}
+
+TEST(SweepErrors, UnknownKeyInPoint) {
+    EXPECT_THAT(error_of(campaign_head + "[[points]]\nD_cm = 3.0\nwall = { mu = 0.5 }\n"),
+                AllOf(HasSubstr("bad.toml:9:1"), HasSubstr("unknown key 'wall' in [[points]] #1"),
+                      HasSubstr("did you mean 'walls'")));
+    EXPECT_THAT(error_of(campaign_head + "[[points]]\nwalls = { m = 0.5 }\n"),
+                HasSubstr("unknown key 'walls.m' in [[points]] #1"));
+}
+
+TEST(SweepErrors, WrongTypes) {
+    EXPECT_THAT(error_of("[material]\nmu = \"high\"\n"),
+                AllOf(HasSubstr("bad.toml:2:6"), HasSubstr("material.mu = \"high\""),
+                      HasSubstr("expected a number"), HasSubstr("got a string")));
+    EXPECT_THAT(error_of("[hopper]\nparticles = 250.5\n"),
+                AllOf(HasSubstr("hopper.particles = 250.5"), HasSubstr("expected an integer"),
+                      HasSubstr("got a float")));
+    EXPECT_THAT(error_of("[hopper]\nparticles = 250.0\n"), HasSubstr("expected an integer"));
+    EXPECT_THAT(error_of("[protocol]\nmax_shakes = true\n"),
+                AllOf(HasSubstr("protocol.max_shakes = true"), HasSubstr("got a boolean")));
+    EXPECT_THAT(error_of("[integrator]\nscheme = 4\n"),
+                AllOf(HasSubstr("integrator.scheme = 4"), HasSubstr("expected a string")));
+    EXPECT_THAT(error_of("[integrator]\nscheme = \"rk4\"\n"),
+                AllOf(HasSubstr("\"rk4\""), HasSubstr("gear4"), HasSubstr("verlet")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nD_cm = 2.7\n"),
+                AllOf(HasSubstr("D_cm = 2.7"), HasSubstr("must be a list")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nD_cm = [2.7, \"3\"]\n"),
+                AllOf(HasSubstr("D_cm = \"3\""), HasSubstr("expected a number")));
+    EXPECT_THAT(error_of("[campaign]\nname = 5\n"),
+                AllOf(HasSubstr("campaign.name = 5"), HasSubstr("expected a string")));
+    EXPECT_THAT(error_of("[campaign]\nname = \"x\"\nrealizations = 2.5\n"),
+                AllOf(HasSubstr("campaign.realizations = 2.5"), HasSubstr("expected an integer")));
+    EXPECT_THAT(error_of("hopper = 3\n"), HasSubstr("must be a table"));
+    // An integer is fine where a float is expected.
+    EXPECT_NO_THROW(parse("[hopper]\ntheta_deg = 45\nwidth_cm = 43\n"));
+}
+
+TEST(SweepErrors, OutOfRange) {
+    struct Case {
+        const char* text;
+        const char* expect;
+    };
+    const Case cases[] = {
+        {"[material]\ne_n = 1.5\n", "material.e_n = 1.5 is out of range: allowed (0, 1]"},
+        {"[material]\ne_n = 0\n", "material.e_n = 0 is out of range: allowed (0, 1]"},
+        {"[walls]\ne_n = -0.1\n", "walls.e_n = -0.1 is out of range"},
+        {"[material]\nmu = 11\n", "material.mu = 11 is out of range: allowed [0, 10]"},
+        {"[material]\nmu = -0.5\n", "material.mu = -0.5 is out of range"},
+        {"[hopper]\ntheta_deg = 95\n", "theta_deg = 95 is out of range: allowed [0, 90] deg"},
+        {"[hopper]\ntheta_deg = -1\n", "theta_deg = -1 is out of range"},
+        {"[hopper]\nparticles = 9223372036854775807\n",
+         "hopper.particles = 9223372036854775807 is out of range"},
+        {"[material]\nmu = 1e300\n", "material.mu = 1e+300 is out of range"},
+        {"[hopper]\nparticles = 0\n",
+         "hopper.particles = 0 is out of range: allowed [1, 10000000]"},
+        {"[hopper]\nwidth_cm = -3\n",
+         "hopper.width_cm = -3 is out of range: allowed (0, 10000] cm"},
+        {"[hopper]\nD_cm = nan\n", "D_cm = nan is out of range"},
+        {"[hopper]\nd_small_cm = inf\n", "hopper.d_small_cm = inf is out of range"},
+        {"[integrator]\nsteps_per_collision = 1\n", "integrator.steps_per_collision = 1"},
+        {"[protocol]\nmax_shakes = -1\n", "protocol.max_shakes = -1 is out of range"},
+        {"[protocol]\nshake_direction_deg = 200\n", "protocol.shake_direction_deg = 200"},
+        {"[material]\npoisson_ratio = 0.7\n", "material.poisson_ratio = 0.7"},
+        {"[walls]\nspacing = 2.5\n", "walls.spacing = 2.5 must be below"},
+        {"[hopper]\nd_small_cm = 0.9\n",
+         "hopper.d_large_cm = 0.77 must be at least hopper.d_small_cm = 0.9"},
+        {"[protocol]\nexit_depth = 1.0\n",
+         "protocol.exit_depth = 1 must exceed protocol.jam_region_height = 2"},
+        {"[hopper]\nparticles = 10\n[protocol]\nempty_threshold = 10\n",
+         "protocol.empty_threshold = 10 must be smaller than hopper.particles = 10"},
+        {"[campaign]\nname = \"x\"\nrealizations = 0\n",
+         "campaign.realizations = 0 is out of range"},
+        {"[campaign]\nname = \"a/b\"\n", "campaign.name = \"a/b\" is not allowed"},
+        {"[campaign]\nname = \"\"\n", "campaign.name = \"\" is not allowed"},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.text);
+        EXPECT_THAT(error_of(c.text), AllOf(HasSubstr("bad.toml"), HasSubstr(c.expect)));
+    }
+}
+
+TEST(SweepErrors, OutOfRangeInsideSweepAndPoints) {
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nmaterial.mu = [0.5, 12]\n"),
+                AllOf(HasSubstr("bad.toml:8:"), HasSubstr("material.mu = 12 is out of range")));
+    EXPECT_THAT(error_of(campaign_head + "[[points]]\nwalls = { e_n = 2 }\n"),
+                HasSubstr("walls.e_n = 2 is out of range"));
+    EXPECT_THAT(error_of(campaign_head + "[[points]]\nrealizations = -4\n"),
+                HasSubstr("realizations = -4 is out of range"));
+}
+
+TEST(SweepErrors, EmptySweepListAndEmptySweep) {
+    EXPECT_THAT(
+        error_of(campaign_head + "[sweep]\nD_cm = []\n"),
+        AllOf(HasSubstr("bad.toml:8:"), HasSubstr("D_cm = [] in [sweep] is an empty list")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nmaterial.mu = []\n"),
+                HasSubstr("material.mu = [] in [sweep] is an empty list"));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\n"), HasSubstr("[sweep] has no lists"));
+}
+
+TEST(SweepErrors, OutletWiderThanTheHopper) {
+    EXPECT_THAT(error_of("[hopper]\nwidth_cm = 20\nD_cm = 25\n"),
+                AllOf(HasSubstr("bad.toml"), HasSubstr("D_cm = 25 must be smaller than "
+                                                       "hopper.width_cm = 20")));
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nD_cm = [2.7, 50]\n"),
+                AllOf(HasSubstr("in point 'D_cm=50 theta_deg=45'"),
+                      HasSubstr("[sweep] combination 2"), HasSubstr("D_cm = 50 must be smaller")));
+}
+
+TEST(SweepErrors, MissingOutletOrAngle) {
+    EXPECT_THAT(error_of("[campaign]\nname = \"x\"\n"),
+                AllOf(HasSubstr("bad.toml"), HasSubstr("D_cm and theta_deg")));
+    EXPECT_THAT(error_of("[campaign]\nname = \"x\"\n[sweep]\nD_cm = [2.7]\n"),
+                AllOf(HasSubstr("[sweep] combination 1 has no theta_deg")));
+    EXPECT_THAT(error_of("[hopper]\nD_cm = 3\n[campaign]\nname = \"x\"\n[[points]]\n"
+                         "material = { mu = 0.5 }\n"),
+                AllOf(HasSubstr("[[points]] #1 (line 5) has no theta_deg")));
+}
+
+TEST(SweepErrors, DuplicatePoints) {
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nD_cm = [2.7, 2.70]\n"),
+                AllOf(HasSubstr("duplicate point 'D_cm=2.7 theta_deg=45'"),
+                      HasSubstr("[sweep] combination 1"), HasSubstr("[sweep] combination 2")));
+    EXPECT_THAT(error_of(campaign_head +
+                         "[sweep]\nmaterial.mu = [0.5]\n[[points]]\nmaterial = { mu = 0.5 }\n"
+                         "[[points]]\nD_cm = 2.7\ntheta_deg = 45.0\nmaterial = { mu = 0.5 }\n"),
+                AllOf(HasSubstr("duplicate point 'D_cm=2.7 theta_deg=45 material.mu=0.5'"),
+                      HasSubstr("[sweep] combination 1 and [[points]] #1")));
+    // Different settings are not duplicates, even if one of them equals a default.
+    EXPECT_NO_THROW(parse(campaign_head + "[[points]]\n[[points]]\nmaterial = { mu = 0.8 }\n"));
+}
+
+TEST(SweepErrors, CampaignProblems) {
+    EXPECT_THAT(error_of("[campaign]\nname = \"x\"\nseed = -1\n"),
+                AllOf(HasSubstr("bad.toml:3:8"), HasSubstr("campaign.seed = -1 is out of range")));
+    EXPECT_THAT(error_of("[campaign]\nseed = 3\n"), HasSubstr("[campaign] needs a name"));
+    EXPECT_THAT(
+        error_of("[campaign]\nname = \"x\"\nseeds = 3\n"),
+        AllOf(HasSubstr("unknown key 'seeds' in [campaign]"), HasSubstr("did you mean 'seed'")));
+    EXPECT_THAT(error_of("[sweep]\nD_cm = [2.7]\n"), HasSubstr("[sweep] needs a [campaign]"));
+    EXPECT_THAT(error_of("[[points]]\nD_cm = 2.7\n"), HasSubstr("[[points]] needs a [campaign]"));
+}
+
+TEST(SweepErrors, TomlSyntaxErrorsNameTheLine) {
+    EXPECT_THAT(error_of("[hopper]\nwidth_cm = 43\nD_cm = = 2.7\n"),
+                AllOf(HasSubstr("bad.toml:3:"), HasSubstr("TOML syntax error")));
+    EXPECT_THAT(error_of("[hopper]\n[hopper]\n"),
+                AllOf(HasSubstr("bad.toml:2:"), HasSubstr("TOML syntax error")));
+    // Truncated files: an unterminated array, table header and string.
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\nD_cm = [2.7, 2.9"),
+                AllOf(HasSubstr("bad.toml:8:"), HasSubstr("TOML syntax error")));
+    EXPECT_THAT(error_of("[hopper]\nwidth_cm = 43\n[mater"),
+                AllOf(HasSubstr("bad.toml:3:"), HasSubstr("TOML syntax error")));
+    EXPECT_THAT(error_of("[campaign]\nname = \"trunc"), HasSubstr("TOML syntax error"));
+}
+
+TEST(SweepErrors, BinaryGarbage) {
+    std::string garbage = "[hopper]\n";
+    for (int i = 0; i < 256; ++i)
+        garbage.push_back(static_cast<char>((i * 37 + 11) & 0xff));
+    EXPECT_THAT(error_of(garbage), AllOf(HasSubstr("bad.toml:"), Not(HasSubstr("no error"))));
+    EXPECT_THAT(error_of(std::string("width_cm = 4\0\1\2", 15)),
+                AllOf(HasSubstr("bad.toml:1:13"), HasSubstr("NUL")));
+    EXPECT_THAT(error_of("\xff\xfe\x80garbage = 1\n"),
+                AllOf(HasSubstr("bad.toml:1:"), HasSubstr("TOML syntax error")));
+}
+
+TEST(SweepErrors, MissingOrUnreadableFile) {
+    const fs::path missing = fs::temp_directory_path() / "hopper-config-no-such-file.toml";
+    EXPECT_THAT(load_error_of(missing),
+                AllOf(HasSubstr(missing.string()), HasSubstr("cannot read the sweep file")));
+    EXPECT_THAT(load_error_of(fs::temp_directory_path()), HasSubstr("is a directory"));
+}
+
+TEST(SweepLoad, LoadKeepsPathAndText) {
+    const fs::path dir = fs::temp_directory_path() / "hopper-config-test";
+    fs::create_directories(dir);
+    const fs::path file = dir / "sweep.toml";
+    const std::string text = campaign_head + "[sweep]\nD_cm = [2.7, 2.9]\n";
+    std::ofstream(file) << text;
+    const SweepFile s = load_sweep(file);
+    EXPECT_EQ(s.path, file);
+    EXPECT_EQ(s.text, text);
+    EXPECT_EQ(s.campaign.store, dir / "t.h5");
+    // Errors name the file as given.
+    std::ofstream(file) << "[material]\nmu = 20\n";
+    EXPECT_THAT(load_error_of(file), HasSubstr(file.string() + ":2:6: material.mu = 20"));
+    fs::remove_all(dir);
+}
