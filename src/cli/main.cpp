@@ -1,0 +1,187 @@
+// The `campaign` executable: parses the command line and dispatches to a command. Nothing else
+// lives here; the commands are in src/cli/<command>.cpp.
+//
+// Exit codes: 0 success, 1 unexpected error (I/O, internal), 2 bad command line or sweep file,
+// 3 the realization failed (simulate).
+
+#include <boost/program_options.hpp>
+#include <iostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cli/options.hpp"
+#include "cli/simulate.hpp"
+#include "hopper/core/error.hpp"
+
+#ifndef HOPPER_VERSION
+#define HOPPER_VERSION "unknown"
+#endif
+
+namespace po = boost::program_options;
+
+namespace {
+
+using hopper::cli::exit_error;
+using hopper::cli::exit_usage;
+
+struct Command {
+    std::string_view name;
+    std::string_view summary;
+};
+
+// The commands this build has (run/status/analyze/submit come with their own issues).
+constexpr Command commands[] = {
+    {"simulate", "run one realization of one scene of a sweep file (no MPI)"},
+};
+
+std::string available_commands() {
+    std::string s;
+    for (const auto& c : commands)
+        s += (s.empty() ? "" : ", ") + std::string(c.name);
+    return s;
+}
+
+void print_usage(std::ostream& os) {
+    os << "usage: campaign <command> [arguments]\n"
+          "       campaign --help | --version | help <command>\n\n"
+          "commands:\n";
+    for (const auto& c : commands)
+        os << "  " << c.name << std::string(12 - c.name.size(), ' ') << c.summary << '\n';
+    os << "\nexit codes: 0 success, 1 unexpected error, 2 bad command line or sweep file,\n"
+          "            3 the realization failed\n";
+}
+
+po::options_description simulate_options() {
+    po::options_description d("simulate options");
+    // Numbers are read as text and checked by cli/options.hpp, so that "-1", "1.5", "nan" get a
+    // clear message (Boost's lexical casts would wrap "-1" into a huge unsigned seed).
+    d.add_options()                                                                           //
+        ("D", po::value<std::string>()->value_name("CM"), "outlet width D in cm (required)")  //
+        ("theta", po::value<std::string>()->value_name("DEG"),
+         "wall angle to the horizontal in degrees (required)")  //
+        ("seed", po::value<std::string>()->value_name("N"),
+         "random seed, a non-negative integer (required)")                           //
+        ("json", po::bool_switch(), "print one JSON object instead of the summary")  //
+        ("snapshots", po::value<std::string>()->value_name("DIR"),
+         "write LAMMPS-style dump files DIR/hopper.NNNNNN.dump (OVITO, ParaView); existing "
+         "hopper.*.dump files in DIR are replaced")  //
+        ("snapshot-interval", po::value<std::string>()->value_name("S"),
+         "seconds of simulated time between snapshots (default 0.05)")                            //
+        ("progress", po::bool_switch(), "progress line on stderr every 0.5 s of simulated time")  //
+        ("help,h", "show this help");
+    return d;
+}
+
+void print_simulate_help(std::ostream& os) {
+    os << "usage: campaign simulate SWEEP.toml --D CM --theta DEG --seed N [--json]\n"
+          "                         [--snapshots DIR] [--snapshot-interval S] [--progress]\n\n"
+          "Runs one realization of the sweep file's base scene with outlet D and wall angle\n"
+          "theta, and prints a summary (or, with --json, one JSON object) on stdout.\n\n"
+       << simulate_options();
+}
+
+const std::string& required(const po::variables_map& vm, const char* name) {
+    if (!vm.count(name))
+        throw hopper::core::ConfigError(std::string("missing required option --") + name);
+    return vm[name].as<std::string>();
+}
+
+int simulate_command(const std::vector<std::string>& args) {
+    po::options_description all = simulate_options();
+    all.add_options()("sweep", po::value<std::vector<std::string>>());
+    po::positional_options_description positional;
+    positional.add("sweep", -1);
+    po::variables_map vm;
+    po::store(
+        po::command_line_parser(args)
+            .options(all)
+            .positional(positional)
+            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
+            .run(),
+        vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+        print_simulate_help(std::cout);
+        return 0;
+    }
+
+    using hopper::cli::parse_finite;
+    hopper::cli::SimulateOptions opt;
+    const auto sweeps =
+        vm.count("sweep") ? vm["sweep"].as<std::vector<std::string>>() : std::vector<std::string>{};
+    if (sweeps.empty()) throw hopper::core::ConfigError("missing the sweep file (SWEEP.toml)");
+    if (sweeps.size() > 1)
+        throw hopper::core::ConfigError("expected one sweep file, got " +
+                                        std::to_string(sweeps.size()) + ": '" + sweeps[0] + "', '" +
+                                        sweeps[1] + "'" + (sweeps.size() > 2 ? ", ..." : ""));
+    opt.sweep = sweeps[0];
+    opt.D_cm = parse_finite("--D", required(vm, "D"));
+    opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
+    opt.seed = hopper::cli::parse_seed("--seed", required(vm, "seed"));
+    opt.json = vm["json"].as<bool>();
+    opt.progress = vm["progress"].as<bool>();
+    if (vm.count("snapshots")) opt.snapshot_dir = vm["snapshots"].as<std::string>();
+    if (vm.count("snapshot-interval")) {
+        if (!opt.snapshot_dir)
+            throw hopper::core::ConfigError("--snapshot-interval needs --snapshots DIR");
+        const std::string& text = vm["snapshot-interval"].as<std::string>();
+        opt.snapshot_interval = parse_finite("--snapshot-interval", text);
+        if (opt.snapshot_interval <= 0.0)
+            throw hopper::core::ConfigError("--snapshot-interval must be > 0, got '" + text + "'");
+    }
+    return hopper::cli::run_simulate(opt, std::cout, std::cerr);
+}
+
+int error(const std::string& message, int code) {
+    std::cout.flush();
+    std::cerr << "campaign: error: " << message << '\n';
+    return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    std::string command;
+    try {
+        if (args.empty()) {
+            print_usage(std::cerr);
+            return exit_usage;
+        }
+        command = args[0];
+        if (command == "--help" || command == "-h") {
+            print_usage(std::cout);
+            return 0;
+        }
+        if (command == "--version") {
+            std::cout << "campaign (hopper) " << HOPPER_VERSION << '\n';
+            return 0;
+        }
+        if (command == "help") {
+            if (args.size() == 1) {
+                print_usage(std::cout);
+                return 0;
+            }
+            if (args[1] == "simulate") {
+                print_simulate_help(std::cout);
+                return 0;
+            }
+            return error("no help for unknown command '" + args[1] +
+                             "' (available: " + available_commands() + ")",
+                         exit_usage);
+        }
+        const std::vector<std::string> rest(args.begin() + 1, args.end());
+        if (command == "simulate") return simulate_command(rest);
+        if (command.starts_with("-"))
+            return error("unknown option '" + command + "' (try 'campaign --help')", exit_usage);
+        return error("unknown command '" + command + "' (available: " + available_commands() + ")",
+                     exit_usage);
+    } catch (const hopper::core::ConfigError& e) {
+        return error(e.what(), exit_usage);
+    } catch (const po::error& e) {
+        return error(std::string(e.what()) + " (see 'campaign help " + command + "')", exit_usage);
+    } catch (const std::exception& e) {
+        return error(e.what(), exit_error);
+    }
+}

@@ -1,0 +1,156 @@
+#include "cli/snapshot_writer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace hopper::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fabricated frame: 3 mobile particles (engine ids 0, 7, 4) and 2 wall particles.
+struct Fixture {
+    std::vector<int> id{0, 7, 4};
+    std::vector<double> x{0.01, -0.02, 0.03}, y{0.10, 0.12, -0.005};
+    std::vector<double> vx{0.5, 0.0, -0.25}, vy{-1.0, 0.125, 2.0}, w{3.0, 0.0, -1.5};
+    std::vector<double> r{0.00301, 0.00385, 0.00301};
+    std::vector<double> wx{-0.05, 0.05}, wy{0.0, 0.0}, wr{0.00385, 0.00385};
+
+    engine::Snapshot snapshot(double t) const {
+        return engine::Snapshot{
+            engine::Phase::discharge, t, t - 1.0, id, x, y, vx, vy, w, r, wx, wy, wr};
+    }
+};
+
+std::vector<std::string> read_lines(const fs::path& p) {
+    std::ifstream in(p);
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);)
+        lines.push_back(line);
+    return lines;
+}
+
+std::vector<double> numbers(const std::string& line) {
+    std::istringstream is(line);
+    std::vector<double> v;
+    for (double d; is >> d;)
+        v.push_back(d);
+    return v;
+}
+
+fs::path fresh_dir(const std::string& name) {
+    const fs::path dir = fs::path(HOPPER_BINARY_DIR) / "tests" / "cli" / "tmp" / name;
+    fs::remove_all(dir);
+    return dir;
+}
+
+TEST(SnapshotWriter, WritesOneLammpsDumpPerFrame) {
+    const Fixture f;
+    const fs::path dir = fresh_dir("dump_basic") / "nested";
+    SnapshotWriter writer(dir);  // creates the directory with its parents
+    ASSERT_TRUE(fs::is_directory(dir));
+
+    const fs::path p0 = writer.write(f.snapshot(1.25));
+    EXPECT_EQ(p0, dir / "hopper.000000.dump");
+    const auto lines = read_lines(p0);
+    ASSERT_EQ(lines.size(), 11u + 5u);  // 11 header lines, 3 mobile + 2 wall
+    EXPECT_EQ(lines[0], "ITEM: TIMESTEP");
+    EXPECT_EQ(lines[1], "0");
+    EXPECT_EQ(lines[2], "ITEM: TIME");
+    EXPECT_DOUBLE_EQ(std::stod(lines[3]), 1.25);
+    EXPECT_EQ(lines[4], "ITEM: NUMBER OF ATOMS");
+    EXPECT_EQ(lines[5], "5");
+    EXPECT_EQ(lines[6], "ITEM: BOX BOUNDS pp pp pp");
+    EXPECT_EQ(lines[10], "ITEM: ATOMS id type x y z vx vy vz radius omegaz");
+
+    // Box: every particle inside, padded by the largest diameter; thin slab in z.
+    const auto bx = numbers(lines[7]), by = numbers(lines[8]), bz = numbers(lines[9]);
+    ASSERT_EQ(bx.size(), 2u);
+    ASSERT_EQ(by.size(), 2u);
+    ASSERT_EQ(bz.size(), 2u);
+    EXPECT_NEAR(bx[0], -0.05 - 0.0077, 1e-12);
+    EXPECT_NEAR(bx[1], 0.05 + 0.0077, 1e-12);
+    EXPECT_NEAR(by[0], -0.005 - 0.0077, 1e-12);
+    EXPECT_NEAR(by[1], 0.12 + 0.0077, 1e-12);
+    EXPECT_NEAR(bz[0], -0.00385, 1e-12);
+    EXPECT_NEAR(bz[1], 0.00385, 1e-12);
+
+    // Second mobile particle: engine id 7 -> dump id 8, type 1.
+    const auto p = numbers(lines[12]);
+    ASSERT_EQ(p.size(), 10u);
+    const std::vector<double> expected{8, 1, -0.02, 0.12, 0.0, 0.0, 0.125, 0.0, 0.00385, 0.0};
+    for (std::size_t k = 0; k < expected.size(); ++k)
+        EXPECT_NEAR(p[k], expected[k], 1e-9 * (1 + std::abs(expected[k]))) << "column " << k;
+    const auto p3 = numbers(lines[13]);
+    EXPECT_EQ(p3[0], 5);
+    EXPECT_DOUBLE_EQ(p3[9], -1.5);  // omegaz
+
+    // Walls: type 2, ids above every possible mobile id, zero velocity.
+    const auto w0 = numbers(lines[14]), w1 = numbers(lines[15]);
+    EXPECT_EQ(w0[0], wall_id_base + 1);
+    EXPECT_EQ(w1[0], wall_id_base + 2);
+    EXPECT_EQ(w0[1], 2);
+    EXPECT_DOUBLE_EQ(w1[2], 0.05);
+    EXPECT_EQ(w1[5], 0.0);
+    EXPECT_DOUBLE_EQ(w1[8], 0.00385);
+
+    const fs::path p1 = writer.write(f.snapshot(1.30));
+    EXPECT_EQ(p1, dir / "hopper.000001.dump");
+    EXPECT_EQ(read_lines(p1)[1], "1");
+    EXPECT_EQ(writer.frames_written(), 2);
+}
+
+TEST(SnapshotWriter, BoxOnlyGrows) {
+    Fixture f;
+    const fs::path dir = fresh_dir("dump_box");
+    SnapshotWriter writer(dir);
+    writer.write(f.snapshot(0.0));
+    f.x = {0.0, 0.0, 0.0};  // everything moves inwards and down
+    f.y = {-0.2, -0.2, -0.2};
+    const auto lines = read_lines(writer.write(f.snapshot(0.05)));
+    const auto by = numbers(lines[8]);
+    EXPECT_NEAR(by[0], -0.2 - 0.0077, 1e-12);
+    EXPECT_NEAR(by[1], 0.12 + 0.0077, 1e-12);  // kept from the first frame
+}
+
+TEST(SnapshotWriter, ReplacesStaleFramesOnly) {
+    const fs::path dir = fresh_dir("dump_stale");
+    fs::create_directories(dir);
+    std::ofstream(dir / "hopper.000123.dump") << "old\n";
+    std::ofstream(dir / "notes.txt") << "keep\n";
+    std::ofstream(dir / "hopper.final.dump") << "keep\n";
+    SnapshotWriter writer(dir);
+    EXPECT_FALSE(fs::exists(dir / "hopper.000123.dump"));
+    EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+    EXPECT_TRUE(fs::exists(dir / "hopper.final.dump"));
+}
+
+TEST(SnapshotWriter, RejectsInconsistentColumnsAndCollidingIds) {
+    Fixture f;
+    std::ostringstream os;
+    DumpBox box;
+    f.vx.pop_back();
+    EXPECT_THROW(write_dump(os, f.snapshot(0.0), 0, box), std::invalid_argument);
+    Fixture g;
+    g.id[1] = static_cast<int>(wall_id_base);
+    EXPECT_THROW(write_dump(os, g.snapshot(0.0), 0, box), std::invalid_argument);
+    Fixture h;
+    h.id[0] = -1;
+    EXPECT_THROW(write_dump(os, h.snapshot(0.0), 0, box), std::invalid_argument);
+}
+
+TEST(SnapshotWriter, FailsClearlyWhenTheDirectoryIsAFile) {
+    const fs::path dir = fresh_dir("dump_file");
+    fs::create_directories(dir.parent_path());
+    std::ofstream(dir) << "a file\n";
+    EXPECT_ANY_THROW(SnapshotWriter{dir});
+}
+
+}  // namespace
+}  // namespace hopper::cli
