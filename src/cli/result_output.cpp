@@ -25,6 +25,7 @@ void write_diagnostics(JsonWriter& w, const engine::Diagnostics& d) {
     w.field("steps", d.steps);
     w.field("settle_steps", d.settle_steps);
     w.field("neighbor_rebuilds", d.neighbor_rebuilds);
+    w.field("particle_steps", d.particle_steps);
     w.field("settle_time", d.settle_time);
     w.field("shake_time", d.shake_time);
     w.field("wall_seconds", d.wall_seconds);

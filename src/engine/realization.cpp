@@ -452,6 +452,7 @@ struct Realization::Impl {
         auto& d = out.diagnostics;
         d.steps = step_count;
         d.neighbor_rebuilds = sys->neighbor_rebuilds();
+        d.particle_steps = particle_steps;
         d.wall_seconds = std::chrono::duration<double>(Clock::now() - wall_start).count();
         d.ns_per_particle_step = particle_steps > 0 ? d.wall_seconds * 1e9 / particle_steps : 0.0;
         d.max_overlap_ratio = sys->max_overlap() / p.particles.d_small;

@@ -244,7 +244,8 @@ struct KernelImpl final : System::Kernel {
                     continue;
                 }
                 const double d = std::sqrt(d2);
-                const Vec2 nrm(dx / d, dy / d);
+                const double inv_d = 1.0 / d;
+                const Vec2 nrm(dx * inv_d, dy * inv_d);
                 const double overlap = rs - d;
                 const double mbar = mi * m[j] / (mi + m[j]);
                 const Vec2 vj(vx[j], vy[j]);
@@ -302,7 +303,8 @@ struct KernelImpl final : System::Kernel {
                     continue;
                 }
                 const double d = std::sqrt(d2);
-                const Vec2 nrm(dx / d, dy / d);
+                const double inv_d = 1.0 / d;
+                const Vec2 nrm(dx * inv_d, dy * inv_d);
                 const double overlap = rs - d;
                 const Vec2 vij = rot ? contact_velocity(vi, vw, ri, wi, wr[j], 0.0, nrm)
                                      : Vec2(vi - vw);

@@ -9,6 +9,13 @@
 
 #include "hopper/core/vec.hpp"
 
+// The laws are tiny and called once per contact per step: force inlining into the pair loops.
+#if defined(__GNUC__)
+#define HOPPER_HOT_INLINE [[gnu::always_inline]] inline
+#else
+#define HOPPER_HOT_INLINE inline
+#endif
+
 namespace hopper::engine {
 
 using core::Vec2;
@@ -28,10 +35,16 @@ struct ContactForce {
     Vec2 tangential;
 };
 
-// F_n = (k_n x - gamma_n mbar v_n) n   (spec/physics.md, normal force)
-inline Vec2 normal_force(const ContactParams& p, double mbar, const Vec2& n, double overlap,
-                         double v_n) {
-    return (p.k_n * overlap - p.gamma_n * mbar * v_n) * n;
+// Signed magnitude of F_n = (k_n x - gamma_n mbar v_n) n   (spec/physics.md, normal force)
+HOPPER_HOT_INLINE double normal_magnitude(const ContactParams& p, double mbar, double overlap,
+                                          double v_n) {
+    return p.k_n * overlap - p.gamma_n * mbar * v_n;
+}
+
+// F_n = (k_n x - gamma_n mbar v_n) n
+HOPPER_HOT_INLINE Vec2 normal_force(const ContactParams& p, double mbar, const Vec2& n,
+                                    double overlap, double v_n) {
+    return normal_magnitude(p, mbar, overlap, v_n) * n;
 }
 
 // Frictionless contacts (mu = 0 everywhere): no tangential force, hence no torque and no
@@ -39,8 +52,10 @@ inline Vec2 normal_force(const ContactParams& p, double mbar, const Vec2& n, dou
 struct FrictionlessLaw {
     static constexpr bool has_tangential = false;
     static constexpr bool has_history = false;
-    static ContactForce evaluate(const ContactParams& p, double mbar, const Vec2& n,
-                                 double overlap, const Vec2& v_ij, Vec2& /*xi*/, double /*dt*/) {
+    HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
+                                                   const Vec2& n, double overlap,
+                                                   const Vec2& v_ij, Vec2& /*xi*/,
+                                                   double /*dt*/) {
         return {normal_force(p, mbar, n, overlap, v_ij.dot(n)), Vec2::Zero()};
     }
 };
@@ -50,16 +65,18 @@ struct FrictionlessLaw {
 struct ViscousFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = false;
-    static ContactForce evaluate(const ContactParams& p, double mbar, const Vec2& n,
-                                 double overlap, const Vec2& v_ij, Vec2& /*xi*/, double /*dt*/) {
+    HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
+                                                   const Vec2& n, double overlap,
+                                                   const Vec2& v_ij, Vec2& /*xi*/,
+                                                   double /*dt*/) {
         const double v_n = v_ij.dot(n);
-        const Vec2 F_n = normal_force(p, mbar, n, overlap, v_n);
+        const double fn = normal_magnitude(p, mbar, overlap, v_n);
         const Vec2 v_t = v_ij - v_n * n;
         Vec2 F_t = -p.gamma_t * mbar * v_t;
-        const double cap = p.mu * F_n.norm();
-        const double ft = F_t.norm();
-        if (ft > cap) F_t *= cap / ft;  // ft > cap >= 0, so ft > 0
-        return {F_n, F_t};
+        const double cap = p.mu * std::abs(fn);  // mu |F_n|
+        const double ft2 = F_t.squaredNorm();
+        if (ft2 > cap * cap) F_t *= cap / std::sqrt(ft2);  // ft2 > cap^2 >= 0, so ft2 > 0
+        return {fn * n, F_t};
     }
 };
 
@@ -69,38 +86,39 @@ struct ViscousFrictionLaw {
 struct SpringFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
-    static ContactForce evaluate(const ContactParams& p, double mbar, const Vec2& n,
-                                 double overlap, const Vec2& v_ij, Vec2& xi, double dt) {
+    HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
+                                                   const Vec2& n, double overlap,
+                                                   const Vec2& v_ij, Vec2& xi, double dt) {
         const double v_n = v_ij.dot(n);
-        const Vec2 F_n = normal_force(p, mbar, n, overlap, v_n);
+        const double fn = normal_magnitude(p, mbar, overlap, v_n);
         const Vec2 v_t = v_ij - v_n * n;
         // xi' = xi - n (n . xi), then grow by v_t dt
         xi = xi - n * n.dot(xi) + v_t * dt;
         // F_t* = -k_t xi' - gamma_t mbar v_t
         const Vec2 damping = p.gamma_t * mbar * v_t;
         Vec2 F_t = -p.k_t * xi - damping;
-        const double cap = p.mu * F_n.norm();
-        const double ft = F_t.norm();
-        if (ft > cap) {
+        const double cap = p.mu * std::abs(fn);  // mu |F_n|
+        const double ft2 = F_t.squaredNorm();
+        if (ft2 > cap * cap) {
             // F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
             // xi' = -(F_t + gamma_t mbar v_t) / k_t
-            F_t *= cap / ft;
+            F_t *= cap / std::sqrt(ft2);
             xi = -(F_t + damping) / p.k_t;
         }
-        return {F_n, F_t};
+        return {fn * n, F_t};
     }
 };
 
 // Relative velocity of the contact points of i and j (n points from j to i):
 // v_ij = v_i - v_j - (R_i w_i + R_j w_j) (z x n)   (spec/physics.md)
-inline Vec2 contact_velocity(const Vec2& v_i, const Vec2& v_j, double R_i, double w_i, double R_j,
+HOPPER_HOT_INLINE Vec2 contact_velocity(const Vec2& v_i, const Vec2& v_j, double R_i, double w_i, double R_j,
                              double w_j, const Vec2& n) {
     return v_i - v_j - (R_i * w_i + R_j * w_j) * core::perp(n);
 }
 
 // Torque (z) on a particle of radius R touching at -R n with tangential force F_t:
 // I dw/dt = -R (n x F_t). The same expression, with R_j, holds for the partner j.
-inline double contact_torque(double R, const Vec2& n, const Vec2& F_t) {
+HOPPER_HOT_INLINE double contact_torque(double R, const Vec2& n, const Vec2& F_t) {
     return -R * core::cross(n, F_t);
 }
 

@@ -33,6 +33,7 @@ struct Diagnostics {
     std::int64_t steps = 0;          // all steps (settle + discharge + shaking)
     std::int64_t settle_steps = 0;
     std::int64_t neighbor_rebuilds = 0;
+    double particle_steps = 0.0;     // sum over steps of the mobile particles integrated
     double settle_time = 0.0;        // simulated seconds of settling
     double shake_time = 0.0;         // simulated seconds spent shaking
     double wall_seconds = 0.0;       // wall-clock time of the whole realization

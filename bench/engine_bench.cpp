@@ -1,0 +1,245 @@
+// Engine speed benchmark (issue 2): ns per particle-step on the two standard full-size scenes,
+// per-phase breakdown, peak memory, and what each thing the engine skips is worth.
+//
+//   bench_engine [--repeats R] [--steps K] [--particles N] [--skips] [--csv FILE]
+//
+// Scenes (published values: 8750 particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, Gear):
+//   column     the settled packing before the outlet opens (gate closed), K steps per repeat;
+//   discharge  D = 4.5 cm, theta = 60 deg, from the opening, 0.5 s of discharge per repeat.
+// Each figure is the median of R repeats; the machine is shared, so compare ratios measured in
+// the same run rather than absolute numbers across runs.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "hopper/engine/realization.hpp"
+#include "hopper/engine/system.hpp"
+
+using namespace hopper::engine;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double peak_rss_mib() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return ru.ru_maxrss / 1024.0;  // Linux: kilobytes
+}
+
+SceneParams full_scene(int particles) {
+    SceneParams p;
+    p.particles.count = particles;
+    p.hopper.outlet = 4.5 * cm;
+    p.hopper.theta = 60.0 * deg;
+    p.material.collision_time = 8.0e-4;
+    p.integrator.steps_per_collision = 50;
+    p.integrator.scheme = Scheme::gear4;
+    return p;
+}
+
+struct Sample {
+    double ns_per_ps, forces, integration, neighbors, other;  // ns per particle-step
+};
+
+struct Row {
+    std::string scene;
+    std::vector<Sample> samples;
+};
+
+Sample median_sample(const std::vector<Sample>& s) {
+    auto col = [&](double Sample::*f) {
+        std::vector<double> v;
+        for (const auto& x : s) v.push_back(x.*f);
+        return median(v);
+    };
+    return {col(&Sample::ns_per_ps), col(&Sample::forces), col(&Sample::integration),
+            col(&Sample::neighbors), col(&Sample::other)};
+}
+
+// Times `run` and splits its wall time by the System's phase timers.
+template <class F>
+Sample timed(System& s, double particle_steps_before, F&& run, double& particle_steps_after) {
+    const PhaseSeconds p0 = s.phase_seconds();
+    const auto t0 = Clock::now();
+    run();
+    const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+    const PhaseSeconds p1 = s.phase_seconds();
+    const double ps = particle_steps_after - particle_steps_before;
+    const double k = 1e9 / ps;
+    const double f = (p1.forces - p0.forces) * k, i = (p1.integration - p0.integration) * k,
+                 n = (p1.neighbors - p0.neighbors) * k;
+    return {wall * k, f, i, n, wall * k - f - i - n};
+}
+
+void print(const Row& r) {
+    const Sample m = median_sample(r.samples);
+    std::printf("%-34s %8.1f %8.1f %8.1f %8.1f %8.1f   (median of %zu)\n", r.scene.c_str(),
+                m.ns_per_ps, m.forces, m.integration, m.neighbors, m.other, r.samples.size());
+}
+
+// Whole realizations of a mid-size hopper with one setting changed: ns per particle-step.
+double realization_ns(const SceneParams& p, std::uint64_t seed, double* wall = nullptr) {
+    const RealizationResult r = run_realization(p, seed);
+    if (r.status == Status::failed) std::fprintf(stderr, "  (failed: %s)\n", r.message.c_str());
+    if (wall) *wall = r.diagnostics.wall_seconds;
+    return r.diagnostics.ns_per_particle_step;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int repeats = 5, steps = 2000, particles = 8750;
+    bool skips = false;
+    std::string csv;
+    for (int a = 1; a < argc; ++a) {
+        const std::string arg = argv[a];
+        auto next = [&]() -> std::string {
+            if (a + 1 >= argc) {
+                std::fprintf(stderr, "bench_engine: %s needs a value\n", arg.c_str());
+                std::exit(2);
+            }
+            return argv[++a];
+        };
+        if (arg == "--repeats") repeats = std::stoi(next());
+        else if (arg == "--steps") steps = std::stoi(next());
+        else if (arg == "--particles") particles = std::stoi(next());
+        else if (arg == "--skips") skips = true;
+        else if (arg == "--csv") csv = next();
+        else {
+            std::fprintf(stderr,
+                         "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--skips] "
+                         "[--csv FILE]\n");
+            return 2;
+        }
+    }
+
+    std::printf("hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, "
+                "gear4; medians of %d repeats\n",
+                particles, repeats);
+    const double rss0 = peak_rss_mib();
+    Realization run(full_scene(particles), 1);
+    System& sys = run.system();
+    auto t0 = Clock::now();
+    run.settle();
+    const double settle_wall = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (run.finished()) {
+        std::fprintf(stderr, "settling failed: %s\n", run.result().message.c_str());
+        return 1;
+    }
+    std::printf("fill + settle: %.2f s simulated, %.1f s wall, %lld steps\n",
+                run.result().diagnostics.settle_time, settle_wall,
+                (long long)run.result().diagnostics.settle_steps);
+
+    std::printf("\n%-34s %8s %8s %8s %8s %8s\n", "scene (ns per particle-step)", "total", "forces",
+                "integr.", "neighb.", "other");
+    std::vector<Row> rows;
+    Row column{"settled column (gate closed)", {}};
+    for (int r = 0; r < repeats; ++r) {
+        const double n = sys.mobile_count();
+        double after = n * steps;
+        column.samples.push_back(timed(sys, 0.0, [&] { sys.run(steps); }, after));
+    }
+    print(column);
+    rows.push_back(column);
+
+    run.open();
+    Row discharge{"discharge D=4.5 cm theta=60 deg", {}};
+    for (int r = 0; r < repeats && !run.finished(); ++r) {
+        const double before = run.result().diagnostics.particle_steps;
+        double after = 0.0;
+        Sample s = timed(
+            sys, before,
+            [&] {
+                run.advance(0.5);
+                after = run.result().diagnostics.particle_steps;
+            },
+            after);
+        discharge.samples.push_back(s);
+    }
+    print(discharge);
+    rows.push_back(discharge);
+    std::printf("(discharge repeats are consecutive 0.5 s windows from the opening: %d -> %d "
+                "particles in the hopper)\n",
+                particles, sys.mobile_count());
+    while (run.advance(5.0)) {
+    }
+    const RealizationResult full = run.result();
+    std::printf("\nfull realization D=4.5 cm theta=60 deg: status %s, empty time %.2f s, %lld "
+                "steps, wall %.1f s (settle included), %.1f ns per particle-step overall\n",
+                to_string(full.status).c_str(), full.empty_time.value_or(-1.0),
+                (long long)full.diagnostics.steps, full.diagnostics.wall_seconds,
+                full.diagnostics.ns_per_particle_step);
+    std::printf("peak memory (max RSS) of the process: %.1f MiB (%.1f MiB before the scene)\n",
+                peak_rss_mib(), rss0);
+
+    if (skips) {
+        // What skipping is worth: whole mid-size realizations (2000 particles, W = 25 cm,
+        // D = 4.5 cm, theta = 60 deg), medians over seeds, as ratios within this run.
+        std::printf("\nwhat each skip is worth (2000 particles, whole realizations, median ns "
+                    "per particle-step over %d seeds):\n",
+                    repeats);
+        auto mid = [] {
+            SceneParams p = full_scene(2000);
+            p.hopper.width = 25.0 * cm;
+            return p;
+        };
+        struct Variant {
+            const char* name;
+            SceneParams p;
+        };
+        std::vector<Variant> variants;
+        variants.push_back({"reference (k_t = 0.8 k_n, mu = 0.8)", mid()});
+        {
+            SceneParams p = mid();
+            p.material.kt_over_kn = 0.0;
+            variants.push_back({"k_t = 0 (no spring history)", p});
+        }
+        {
+            SceneParams p = mid();
+            p.material.system.mu = p.material.wall.mu = 0.0;
+            variants.push_back({"mu = 0 (no tangential, no rotation)", p});
+        }
+        {
+            SceneParams p = mid();
+            p.integrator.scheme = Scheme::verlet;
+            variants.push_back({"velocity Verlet instead of Gear", p});
+        }
+        {
+            SceneParams p = mid();
+            p.protocol.exit_depth = 60.0;  // particles fall 46 cm before they are removed
+            variants.push_back({"removal 60 d_large below (not 4)", p});
+        }
+        double ref = 0.0;
+        for (auto& v : variants) {
+            std::vector<double> ns;
+            for (int r = 0; r < repeats; ++r) ns.push_back(realization_ns(v.p, 100 + r));
+            const double m = median(ns);
+            if (ref == 0.0) ref = m;
+            std::printf("  %-40s %7.1f ns  (x %.2f)\n", v.name, m, m / ref);
+        }
+    }
+
+    if (!csv.empty()) {
+        std::ofstream out(csv);
+        out << "scene,repeat,ns_per_particle_step,forces,integration,neighbors,other\n";
+        for (const auto& r : rows)
+            for (std::size_t k = 0; k < r.samples.size(); ++k) {
+                const auto& s = r.samples[k];
+                out << '"' << r.scene << "\"," << k << ',' << s.ns_per_ps << ',' << s.forces << ','
+                    << s.integration << ',' << s.neighbors << ',' << s.other << '\n';
+            }
+    }
+    return 0;
+}
