@@ -350,9 +350,15 @@ System::System(const SystemConfig& config) : config_(config) {
         throw core::ConfigError("System: neighbour skin must be positive and finite");
     const bool friction = config_.particle.mu > 0.0 || config_.wall.mu > 0.0;
     const bool spring = config_.particle.k_t > 0.0 || config_.wall.k_t > 0.0;
+    // One law serves both kinds of contact, so they must agree on having a spring: a spring law
+    // with k_t = 0 would divide by zero when it shortens the spring. (One kt_over_kn in the
+    // sweep file sets both, so a scene never hits this.)
+    if (friction && (config_.particle.k_t > 0.0) != (config_.wall.k_t > 0.0))
+        throw core::ConfigError(
+            "System: particle-particle and particle-wall contacts must both have k_t > 0 or both "
+            "k_t = 0");
     // One-time dispatch (style.md): frictionless contacts exert no torque, so rotation is not
     // integrated at all; k_t = 0 needs no spring history.
-    rotation_ = friction;
     history_ = friction && spring;
     if (!friction)
         kernel_ = make_kernel_for<FrictionlessLaw>(config_.scheme);
@@ -373,7 +379,7 @@ int System::add_particle(const Vec2& pos, double diameter, double mass, double i
     y_.push_back(pos.y());
     vx_.push_back(vel.x());
     vy_.push_back(vel.y());
-    w_.push_back(rotation_ ? omega : 0.0);
+    w_.push_back(omega);  // without friction nothing exerts torque: omega stays as given
     fx_.push_back(0.0);
     fy_.push_back(0.0);
     tq_.push_back(0.0);
@@ -436,7 +442,7 @@ std::vector<Removal> System::take_removals() {
 void System::set_velocity(int index, const Vec2& v, double omega) {
     vx_[index] = v.x();
     vy_[index] = v.y();
-    w_[index] = rotation_ ? omega : 0.0;
+    w_[index] = omega;
 }
 
 int System::index_of(int id) const {
@@ -450,7 +456,14 @@ void System::ensure_ready() {
     // The integrator's history is rebuilt by prime() below.
     for (auto* col : {&x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_}) col->clear();
     rebuild();
+    // The priming evaluation only provides accelerations: it must not advance the springs
+    // (the first real step grows them by v_t dt), so they are put back afterwards.
+    const std::vector<double> px = pxi_x_, py = pxi_y_, wxs = wxi_x_, wys = wxi_y_;
     const double ov = kernel_->forces(*this);
+    pxi_x_ = px;
+    pxi_y_ = py;
+    wxi_x_ = wxs;
+    wxi_y_ = wys;
     check_overlap(ov);
     kernel_->prime(*this);
     ready_ = true;

@@ -144,7 +144,6 @@ private:
     bool need_rebuild_ = true;
     bool walls_changed_ = true;
     bool history_saved_ = false;  // save_history() already ran for the coming rebuild
-    bool rotation_ = true;       // integrate rotation (false when no contact can exert torque)
     bool history_ = false;       // keep tangential springs (k_t > 0 and mu > 0)
     int next_id_ = 0;
 

@@ -1,0 +1,173 @@
+// The realization protocol on tiny hoppers (spec/physics.md, realization protocol; issue 2's
+// required behaviour tests). Each run takes about a second.
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "hopper/core/error.hpp"
+#include "hopper/engine/realization.hpp"
+#include "hopper/engine/system.hpp"
+
+using namespace hopper::engine;
+
+namespace {
+
+// A 12 cm wide hopper of 300 particles with the published material and tau_c = 8e-4 s.
+SceneParams tiny(double D_cm, double theta_deg = 45.0) {
+    SceneParams p;
+    p.hopper.width = 12.0 * cm;
+    p.particles.count = 300;
+    p.hopper.outlet = D_cm * cm;
+    p.hopper.theta = theta_deg * deg;
+    p.material.collision_time = 8.0e-4;
+    p.protocol.max_time = 30.0;
+    return p;
+}
+
+// Invariants every finished realization must satisfy, whatever happened in it.
+void expect_consistent(const RealizationResult& r) {
+    ASSERT_EQ(r.survival_times.size(), r.censored.size());
+    ASSERT_EQ(r.jam_onsets.size(), std::size_t(r.n_jams));
+    ASSERT_EQ(r.shakes_per_jam.size(), std::size_t(r.n_jams));
+    EXPECT_EQ(std::accumulate(r.shakes_per_jam.begin(), r.shakes_per_jam.end(), 0), r.n_shakes);
+    // Only the last interval may be censored; one uncensored interval per jam.
+    int uncensored = 0;
+    for (std::size_t k = 0; k < r.censored.size(); ++k) {
+        if (r.censored[k]) EXPECT_EQ(k + 1, r.censored.size());
+        uncensored += !r.censored[k];
+        EXPECT_GE(r.survival_times[k], 0.0);
+    }
+    EXPECT_EQ(uncensored, r.n_jams);
+    EXPECT_TRUE(std::is_sorted(r.jam_onsets.begin(), r.jam_onsets.end()));
+    EXPECT_TRUE(std::is_sorted(r.exit_times.begin(), r.exit_times.end()));
+    EXPECT_EQ(int(r.exit_times.size()), r.discharged);
+    EXPECT_EQ(r.curve_time.size(), r.curve_count.size());
+    EXPECT_TRUE(std::is_sorted(r.curve_count.rbegin(), r.curve_count.rend()));
+    if (r.empty_time) {
+        // Survival intervals partition the flowing part of the discharge: their sum cannot
+        // exceed the empty time (the rest is detection waiting, t_check per jam).
+        const double sum = std::accumulate(r.survival_times.begin(), r.survival_times.end(), 0.0);
+        EXPECT_LE(sum, *r.empty_time + 1e-12);
+        EXPECT_EQ(r.discharged, r.particles);
+    }
+}
+
+}  // namespace
+
+TEST(Realization, WideOutletEmptiesWithoutJamming) {
+    const RealizationResult r = run_realization(tiny(4.5, 60.0), 1);
+    expect_consistent(r);
+    EXPECT_EQ(r.status, Status::complete) << r.message;
+    EXPECT_EQ(r.n_jams, 0);
+    ASSERT_EQ(r.survival_times.size(), 1u);
+    EXPECT_TRUE(r.censored[0]);
+    ASSERT_TRUE(r.empty_time.has_value());
+    EXPECT_DOUBLE_EQ(r.survival_times[0], *r.empty_time);
+    ASSERT_TRUE(r.discharge_rate.has_value());
+    // 300 particles leave in about a second or two: the rate must be of that order.
+    EXPECT_GT(*r.discharge_rate, 50.0);
+    EXPECT_LT(*r.discharge_rate, 2000.0);
+    EXPECT_GT(r.discharge_rate_mass, 0.0);
+}
+
+TEST(Realization, SmallOutletJamsAndShakingUnjamsIt) {
+    // D = 2.0 cm is about 2.9 mean diameters: clogs are frequent.
+    int jams = 0, cleared = 0;
+    for (std::uint64_t seed : {1, 2}) {
+        const RealizationResult r = run_realization(tiny(2.0), seed);
+        expect_consistent(r);
+        EXPECT_EQ(r.status, Status::complete) << r.message;
+        jams += r.n_jams;
+        cleared += r.n_jams;  // complete => every jam was cleared by shaking
+        EXPECT_GE(r.n_shakes, r.n_jams);
+        EXPECT_EQ(r.discharged, 300);
+    }
+    EXPECT_GE(jams, 2);
+    EXPECT_EQ(cleared, jams);
+}
+
+TEST(Realization, WithoutFrictionTheSmallOutletDoesNotJam) {
+    SceneParams p = tiny(2.0);
+    p.material.system.mu = 0.0;
+    p.material.wall.mu = 0.0;
+    const RealizationResult r = run_realization(p, 1);
+    expect_consistent(r);
+    EXPECT_EQ(r.status, Status::complete) << r.message;
+    EXPECT_EQ(r.n_jams, 0);
+}
+
+TEST(Realization, DeterministicForASeedAndDifferentForAnother) {
+    const SceneParams p = tiny(2.0);
+    const RealizationResult a = run_realization(p, 7), b = run_realization(p, 7);
+    const RealizationResult c = run_realization(p, 8);
+    EXPECT_EQ(a.survival_times, b.survival_times);
+    EXPECT_EQ(a.jam_onsets, b.jam_onsets);
+    EXPECT_EQ(a.exit_times, b.exit_times);
+    EXPECT_EQ(a.curve_count, b.curve_count);
+    EXPECT_EQ(a.diagnostics.steps, b.diagnostics.steps);
+    EXPECT_EQ(a.empty_time, b.empty_time);
+    EXPECT_NE(a.exit_times, c.exit_times);
+}
+
+TEST(Realization, NoShakesAllowedEndsArrestedAtTheFirstJam) {
+    SceneParams p = tiny(1.6);
+    p.protocol.max_shakes = 0;
+    const RealizationResult r = run_realization(p, 1);
+    expect_consistent(r);
+    EXPECT_EQ(r.status, Status::arrested) << r.message;
+    EXPECT_EQ(r.n_jams, 1);
+    EXPECT_FALSE(r.empty_time.has_value());
+    EXPECT_NE(r.message.find("not cleared"), std::string::npos) << r.message;
+}
+
+TEST(Realization, TimeLimitCensorsTheRunningInterval) {
+    SceneParams p = tiny(4.5, 60.0);
+    p.protocol.max_time = 0.3;
+    const RealizationResult r = run_realization(p, 1);
+    expect_consistent(r);
+    EXPECT_EQ(r.status, Status::time_limit) << r.message;
+    ASSERT_FALSE(r.censored.empty());
+    EXPECT_TRUE(r.censored.back());
+    EXPECT_NEAR(r.survival_times.back(), 0.3, 1e-3);
+    EXPECT_FALSE(r.empty_time.has_value());
+    EXPECT_LT(r.discharged, 300);
+}
+
+TEST(Realization, OverlapGuardFailsWithTheCauseAndTheRemedy) {
+    SceneParams p = tiny(4.5, 60.0);
+    p.protocol.max_overlap = 1e-4;  // no real packing stays below this
+    const RealizationResult r = run_realization(p, 1);
+    EXPECT_EQ(r.status, Status::failed);
+    EXPECT_NE(r.message.find("overlap"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("time step"), std::string::npos) << r.message;
+    EXPECT_TRUE(r.survival_times.empty());  // nothing half-measured is reported as data
+}
+
+TEST(Realization, UnstableTimeStepFailsInsteadOfProducingGarbage) {
+    // Velocity Verlet is unstable for omega dt > 2; for a disk on a wall omega = sqrt(k_n/m).
+    // steps_per_collision = 1.5 gives dt = tau_c / 1.5, i.e. omega dt ~ 1.5 pi / sqrt(2) ~ 3.3.
+    SceneParams p = tiny(4.5, 60.0);
+    p.integrator.scheme = Scheme::verlet;
+    p.integrator.steps_per_collision = 2.0;
+    p.protocol.max_overlap = 0.25;
+    const RealizationResult r = run_realization(p, 1);
+    EXPECT_EQ(r.status, Status::failed) << "status " << to_string(r.status);
+    EXPECT_NE(r.message.find("time step"), std::string::npos) << r.message;
+}
+
+TEST(Realization, SettledColumnCarriesItsWeightOnTheWalls) {
+    // After settling, the closed hopper is at rest: the walls carry the whole weight.
+    SceneParams p = tiny(2.7, 45.0);
+    Realization run(p, 3);
+    run.settle();
+    ASSERT_FALSE(run.finished()) << run.result().message;
+    System& s = run.system();
+    double weight = 0.0;
+    for (double m : s.m())
+        weight += m * p.gravity;
+    s.run(200);  // a fresh force evaluation at rest
+    // At rest sum F = 0 for every particle, so the walls push up with the total weight. The
+    // residual is the settling tolerance (kinetic energy below 1e-4 m g d): well under 1 %.
+    EXPECT_NEAR(s.wall_force().y(), -weight, 0.01 * weight);
+    EXPECT_NEAR(s.wall_force().x(), 0.0, 0.01 * weight);
+}
