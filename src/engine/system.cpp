@@ -28,15 +28,63 @@ template <class T>
 void permute(std::vector<T>& col, const std::vector<int>& order, std::vector<T>& scratch) {
     if (col.empty()) return;
     scratch.resize(col.size());
-    for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = col[order[k]];
+    for (std::size_t k = 0; k < order.size(); ++k)
+        scratch[k] = col[order[k]];
     col.swap(scratch);
 }
 
 template <class T>
 void compact(std::vector<T>& col, const std::vector<int>& keep) {
     if (col.empty()) return;
-    for (std::size_t k = 0; k < keep.size(); ++k) col[k] = col[keep[k]];
+    for (std::size_t k = 0; k < keep.size(); ++k)
+        col[k] = col[keep[k]];
     col.resize(keep.size());
+}
+
+// Gear predictor on one coordinate (Pascal triangle on the scaled derivatives
+// r_k = dt^k/k! d^k r/dt^k; velocity kept unscaled). Free functions over raw columns so that
+// the compiler sees no aliasing and vectorizes them.
+void gear_predict_axis(std::size_t n, double dt, double* __restrict x, double* __restrict v,
+                       double* __restrict x2, double* __restrict x3, const double* __restrict x4) {
+    const double inv_dt = 1.0 / dt;
+    for (std::size_t i = 0; i < n; ++i) {
+        x[i] += dt * v[i] + x2[i] + x3[i] + x4[i];
+        v[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
+        x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
+        x3[i] += 4.0 * x4[i];
+    }
+}
+
+// Gear corrector on one coordinate: e = dt^2/2 a(t+dt) - predicted r_2, with
+// a = force * inv_mass + g. x may be null (rotation: the angle itself is not tracked).
+void gear_correct_axis(std::size_t n, double dt, double g, const double* __restrict force,
+                       const double* __restrict inv_mass, double* __restrict x,
+                       double* __restrict v, double* __restrict x2, double* __restrict x3,
+                       double* __restrict x4) {
+    const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
+    if (x)
+        for (std::size_t i = 0; i < n; ++i)
+            x[i] += gear_c0 * (h * (force[i] * inv_mass[i] + g) - x2[i]);
+    for (std::size_t i = 0; i < n; ++i) {
+        const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
+        v[i] += gear_c1 * e * inv_dt;
+        x2[i] += e;
+        x3[i] += gear_c3 * e;
+        x4[i] += gear_c4 * e;
+    }
+}
+
+// Largest squared displacement since the last rebuild; NaN if any position is not finite.
+double max_displacement2(std::size_t n, const double* __restrict x, const double* __restrict y,
+                         const double* __restrict xr, const double* __restrict yr) {
+    double maxd2 = 0.0, sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double dx = x[i] - xr[i], dy = y[i] - yr[i];
+        const double d2 = dx * dx + dy * dy;
+        maxd2 = std::max(maxd2, d2);
+        sum += d2;  // NaN or inf anywhere makes the sum non-finite
+    }
+    return std::isfinite(sum) ? maxd2 : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
@@ -46,7 +94,8 @@ void compact(std::vector<T>& col, const std::vector<int>& keep) {
 struct System::Kernel {
     virtual ~Kernel() = default;
     // Advances positions; returns the largest squared displacement since the last rebuild
-    // (NaN when the state is not finite).
+    // (NaN when the state is not finite). Loops use __restrict pointers (the columns never
+    // alias) so that the compiler vectorizes them.
     virtual double predict(System& s) = 0;
     // Computes forces and torques; returns the largest overlap of this evaluation.
     virtual double forces(System& s) = 0;
@@ -62,40 +111,18 @@ struct KernelImpl final : System::Kernel {
     double predict(System& s) override {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
-        double* x = s.x_.data();
-        double* y = s.y_.data();
-        double* vx = s.vx_.data();
-        double* vy = s.vy_.data();
-        double* w = s.w_.data();
-        const double* xr = s.xref_.data();
-        const double* yr = s.yref_.data();
-        double maxd2 = 0.0;
         if constexpr (S == Scheme::gear4) {
-            // Taylor predictor (Pascal triangle) on the scaled derivatives.
-            const double inv_dt = 1.0 / dt;
-            double* x2 = s.x2_.data();
-            double* x3 = s.x3_.data();
-            double* x4 = s.x4_.data();
-            double* y2 = s.y2_.data();
-            double* y3 = s.y3_.data();
-            double* y4 = s.y4_.data();
-            for (std::size_t i = 0; i < n; ++i) {
-                x[i] += dt * vx[i] + x2[i] + x3[i] + x4[i];
-                vx[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
-                x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
-                x3[i] += 4.0 * x4[i];
-                y[i] += dt * vy[i] + y2[i] + y3[i] + y4[i];
-                vy[i] += (2.0 * y2[i] + 3.0 * y3[i] + 4.0 * y4[i]) * inv_dt;
-                y2[i] += 3.0 * y3[i] + 6.0 * y4[i];
-                y3[i] += 4.0 * y4[i];
-                const double dx = x[i] - xr[i], dy = y[i] - yr[i];
-                const double d2 = dx * dx + dy * dy;
-                maxd2 = (d2 > maxd2 || d2 != d2) ? d2 : maxd2;  // keeps a NaN
-            }
+            gear_predict_axis(n, dt, s.x_.data(), s.vx_.data(), s.x2_.data(), s.x3_.data(),
+                              s.x4_.data());
+            gear_predict_axis(n, dt, s.y_.data(), s.vy_.data(), s.y2_.data(), s.y3_.data(),
+                              s.y4_.data());
             if constexpr (rot) {
-                double* w2 = s.w2_.data();
-                double* w3 = s.w3_.data();
-                double* w4 = s.w4_.data();
+                // The angle is not tracked: predict omega and its derivatives only.
+                double* __restrict w = s.w_.data();
+                double* __restrict w2 = s.w2_.data();
+                double* __restrict w3 = s.w3_.data();
+                const double* __restrict w4 = s.w4_.data();
+                const double inv_dt = 1.0 / dt;
                 for (std::size_t i = 0; i < n; ++i) {
                     w[i] += (2.0 * w2[i] + 3.0 * w3[i] + 4.0 * w4[i]) * inv_dt;
                     w2[i] += 3.0 * w3[i] + 6.0 * w4[i];
@@ -106,84 +133,59 @@ struct KernelImpl final : System::Kernel {
             // Velocity Verlet: half kick with the last forces, then drift.
             const double hdt = 0.5 * dt;
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-            const double* fx = s.fx_.data();
-            const double* fy = s.fy_.data();
-            const double* im = s.inv_m_.data();
+            double* __restrict x = s.x_.data();
+            double* __restrict y = s.y_.data();
+            double* __restrict vx = s.vx_.data();
+            double* __restrict vy = s.vy_.data();
+            const double* __restrict fx = s.fx_.data();
+            const double* __restrict fy = s.fy_.data();
+            const double* __restrict im = s.inv_m_.data();
             for (std::size_t i = 0; i < n; ++i) {
                 vx[i] += hdt * (fx[i] * im[i] + gx);
                 vy[i] += hdt * (fy[i] * im[i] + gy);
                 x[i] += dt * vx[i];
                 y[i] += dt * vy[i];
-                const double dx = x[i] - xr[i], dy = y[i] - yr[i];
-                const double d2 = dx * dx + dy * dy;
-                maxd2 = (d2 > maxd2 || d2 != d2) ? d2 : maxd2;
             }
             if constexpr (rot) {
-                const double* tq = s.tq_.data();
-                const double* iI = s.inv_I_.data();
-                for (std::size_t i = 0; i < n; ++i) w[i] += hdt * tq[i] * iI[i];
+                double* __restrict w = s.w_.data();
+                const double* __restrict tq = s.tq_.data();
+                const double* __restrict iI = s.inv_I_.data();
+                for (std::size_t i = 0; i < n; ++i)
+                    w[i] += hdt * tq[i] * iI[i];
             }
         }
-        return maxd2;
+        return max_displacement2(n, s.x_.data(), s.y_.data(), s.xref_.data(), s.yref_.data());
     }
 
     void correct(System& s) override {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
         const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-        double* vx = s.vx_.data();
-        double* vy = s.vy_.data();
-        double* w = s.w_.data();
-        const double* fx = s.fx_.data();
-        const double* fy = s.fy_.data();
-        const double* tq = s.tq_.data();
-        const double* im = s.inv_m_.data();
-        const double* iI = s.inv_I_.data();
         if constexpr (S == Scheme::gear4) {
-            // Corrector: delta = dt^2/2 a(t+dt) - predicted scaled acceleration.
-            const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
-            double* x = s.x_.data();
-            double* y = s.y_.data();
-            double* x2 = s.x2_.data();
-            double* x3 = s.x3_.data();
-            double* x4 = s.x4_.data();
-            double* y2 = s.y2_.data();
-            double* y3 = s.y3_.data();
-            double* y4 = s.y4_.data();
-            for (std::size_t i = 0; i < n; ++i) {
-                const double ex = h * (fx[i] * im[i] + gx) - x2[i];
-                x[i] += gear_c0 * ex;
-                vx[i] += gear_c1 * ex * inv_dt;
-                x2[i] += ex;
-                x3[i] += gear_c3 * ex;
-                x4[i] += gear_c4 * ex;
-                const double ey = h * (fy[i] * im[i] + gy) - y2[i];
-                y[i] += gear_c0 * ey;
-                vy[i] += gear_c1 * ey * inv_dt;
-                y2[i] += ey;
-                y3[i] += gear_c3 * ey;
-                y4[i] += gear_c4 * ey;
-            }
-            if constexpr (rot) {
-                double* w2 = s.w2_.data();
-                double* w3 = s.w3_.data();
-                double* w4 = s.w4_.data();
-                for (std::size_t i = 0; i < n; ++i) {
-                    const double e = h * tq[i] * iI[i] - w2[i];
-                    w[i] += gear_c1 * e * inv_dt;
-                    w2[i] += e;
-                    w3[i] += gear_c3 * e;
-                    w4[i] += gear_c4 * e;
-                }
-            }
+            gear_correct_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.x_.data(), s.vx_.data(),
+                              s.x2_.data(), s.x3_.data(), s.x4_.data());
+            gear_correct_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.y_.data(), s.vy_.data(),
+                              s.y2_.data(), s.y3_.data(), s.y4_.data());
+            if constexpr (rot)
+                gear_correct_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), nullptr, s.w_.data(),
+                                  s.w2_.data(), s.w3_.data(), s.w4_.data());
         } else {
             const double hdt = 0.5 * dt;
+            double* __restrict vx = s.vx_.data();
+            double* __restrict vy = s.vy_.data();
+            const double* __restrict fx = s.fx_.data();
+            const double* __restrict fy = s.fy_.data();
+            const double* __restrict im = s.inv_m_.data();
             for (std::size_t i = 0; i < n; ++i) {
                 vx[i] += hdt * (fx[i] * im[i] + gx);
                 vy[i] += hdt * (fy[i] * im[i] + gy);
             }
             if constexpr (rot) {
-                for (std::size_t i = 0; i < n; ++i) w[i] += hdt * tq[i] * iI[i];
+                double* __restrict w = s.w_.data();
+                const double* __restrict tq = s.tq_.data();
+                const double* __restrict iI = s.inv_I_.data();
+                for (std::size_t i = 0; i < n; ++i)
+                    w[i] += hdt * tq[i] * iI[i];
             }
         }
     }
@@ -193,8 +195,8 @@ struct KernelImpl final : System::Kernel {
             const std::size_t n = s.x_.size();
             const double h = 0.5 * s.config_.dt * s.config_.dt;
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-            for (auto* col : {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_,
-                              &s.w4_})
+            for (auto* col :
+                 {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_, &s.w4_})
                 col->assign(n, 0.0);
             for (std::size_t i = 0; i < n; ++i) {
                 s.x2_[i] = h * (s.fx_[i] * s.inv_m_[i] + gx);
@@ -249,8 +251,8 @@ struct KernelImpl final : System::Kernel {
                 const double overlap = rs - d;
                 const double mbar = mi * m[j] / (mi + m[j]);
                 const Vec2 vj(vx[j], vy[j]);
-                const Vec2 vij = rot ? contact_velocity(vi, vj, ri, wi, r[j], w[j], nrm)
-                                     : Vec2(vi - vj);
+                const Vec2 vij =
+                    rot ? contact_velocity(vi, vj, ri, wi, r[j], w[j], nrm) : Vec2(vi - vj);
                 Vec2 spring = Law::has_history ? Vec2(hx[k], hy[k]) : Vec2::Zero();
                 const ContactForce cf = Law::evaluate(pp, mbar, nrm, overlap, vij, spring, dt);
                 if constexpr (Law::has_history) {
@@ -264,7 +266,7 @@ struct KernelImpl final : System::Kernel {
                 fy[j] -= F.y();
                 if constexpr (rot) {
                     const double c = core::cross(nrm, cf.tangential);
-                    tqi -= ri * c;    // -R_i (n x F_t)
+                    tqi -= ri * c;      // -R_i (n x F_t)
                     tq[j] -= r[j] * c;  // -R_j (n x F_t): the same form for the partner
                 }
                 max_ov = std::max(max_ov, overlap);
@@ -306,8 +308,8 @@ struct KernelImpl final : System::Kernel {
                 const double inv_d = 1.0 / d;
                 const Vec2 nrm(dx * inv_d, dy * inv_d);
                 const double overlap = rs - d;
-                const Vec2 vij = rot ? contact_velocity(vi, vw, ri, wi, wr[j], 0.0, nrm)
-                                     : Vec2(vi - vw);
+                const Vec2 vij =
+                    rot ? contact_velocity(vi, vw, ri, wi, wr[j], 0.0, nrm) : Vec2(vi - vw);
                 Vec2 spring = Law::has_history ? Vec2(gx[k], gy[k]) : Vec2::Zero();
                 const ContactForce cf = Law::evaluate(pw, mi, nrm, overlap, vij, spring, dt);
                 if constexpr (Law::has_history) {
@@ -373,8 +375,9 @@ System::~System() = default;
 int System::add_particle(const Vec2& pos, double diameter, double mass, double inertia,
                          const Vec2& vel, double omega) {
     if (!(diameter > 0.0 && mass > 0.0 && inertia > 0.0) || !pos.allFinite() || !vel.allFinite())
-        throw core::ConfigError("System::add_particle: diameter, mass and inertia must be positive "
-                                "and position and velocity finite");
+        throw core::ConfigError(
+            "System::add_particle: diameter, mass and inertia must be positive "
+            "and position and velocity finite");
     x_.push_back(pos.x());
     y_.push_back(pos.y());
     vx_.push_back(vel.x());
@@ -426,7 +429,9 @@ void System::set_wall_motion(const Vec2& offset, const Vec2& velocity) {
     wall_velocity_ = velocity;
 }
 
-void System::set_removal_floor(double y) { removal_floor_ = y; }
+void System::set_removal_floor(double y) {
+    removal_floor_ = y;
+}
 
 void System::flush_removals() {
     if (!ready_) return;
@@ -454,7 +459,8 @@ int System::index_of(int id) const {
 void System::ensure_ready() {
     if (ready_) return;
     // The integrator's history is rebuilt by prime() below.
-    for (auto* col : {&x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_}) col->clear();
+    for (auto* col : {&x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+        col->clear();
     rebuild();
     // The priming evaluation only provides accelerations: it must not advance the springs
     // (the first real step grows them by v_t dt), so they are put back afterwards.
@@ -475,8 +481,7 @@ void System::step() {
     const double maxd2 = kernel_->predict(*this);
     const auto t1 = Clock::now();
     if (!(maxd2 <= std::numeric_limits<double>::max())) fail_nonfinite();
-    const double dmax =
-        std::max(std::sqrt(maxd2), (wall_offset_ - wall_offset_ref_).norm());
+    const double dmax = std::max(std::sqrt(maxd2), (wall_offset_ - wall_offset_ref_).norm());
     if (need_rebuild_ || 2.0 * dmax > config_.skin) rebuild();
     const auto t2 = Clock::now();
     const double ov = kernel_->forces(*this);
@@ -491,7 +496,8 @@ void System::step() {
 }
 
 void System::run(std::int64_t steps) {
-    for (std::int64_t k = 0; k < steps; ++k) step();
+    for (std::int64_t k = 0; k < steps; ++k)
+        step();
 }
 
 void System::check_overlap(double step_max_overlap) {
@@ -522,9 +528,11 @@ void System::rebuild() {
     history_saved_ = false;
     remove_below_floor();
     r_max_ = 0.0;
-    for (double r : r_) r_max_ = std::max(r_max_, r);
+    for (double r : r_)
+        r_max_ = std::max(r_max_, r);
     wr_max_ = 0.0;
-    for (double r : wr_) wr_max_ = std::max(wr_max_, r);
+    for (double r : wr_)
+        wr_max_ = std::max(wr_max_, r);
     const double cutoff = 2.0 * r_max_ + config_.skin;
     const double wcutoff = r_max_ + wr_max_ + config_.skin;
     if (walls_changed_ || wcutoff > wcell_size_) build_wall_grid(wcutoff);
@@ -548,8 +556,8 @@ void System::remove_below_floor() {
             keep.push_back(int(i));
     }
     if (keep.size() == y_.size()) return;
-    for (auto* col : {&x_, &y_, &vx_, &vy_, &w_, &fx_, &fy_, &tq_, &r_, &m_, &inv_m_, &inv_I_,
-                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+    for (auto* col : {&x_,     &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_, &inv_m_,
+                      &inv_I_, &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
         compact(*col, keep);
     compact(id_, keep);
 }
@@ -585,10 +593,12 @@ void System::build_wall_grid(double cutoff) {
         cell[k] = cx + cy * wgrid_nx_;
         ++wcell_start_[cell[k] + 1];
     }
-    for (int c = 0; c < ncell; ++c) wcell_start_[c + 1] += wcell_start_[c];
+    for (int c = 0; c < ncell; ++c)
+        wcell_start_[c + 1] += wcell_start_[c];
     wcell_items_.assign(nw, 0);
     std::vector<int> fill(wcell_start_.begin(), wcell_start_.end() - 1);
-    for (std::size_t k = 0; k < nw; ++k) wcell_items_[fill[cell[k]]++] = int(k);
+    for (std::size_t k = 0; k < nw; ++k)
+        wcell_items_[fill[cell[k]]++] = int(k);
     walls_changed_ = false;
 }
 
@@ -622,7 +632,8 @@ void System::permute_by_cell(double cutoff) {
     }
     double cs = cutoff;
     const double max_cells = 4.0 * double(n + wx_.size()) + 1024.0;
-    while (((x1 - x0) / cs + 1) * ((y1 - y0) / cs + 1) > max_cells) cs *= 1.5;
+    while (((x1 - x0) / cs + 1) * ((y1 - y0) / cs + 1) > max_cells)
+        cs *= 1.5;
     cell_size_ = cs;
     grid_x0_ = x0;
     grid_y0_ = y0;
@@ -637,19 +648,22 @@ void System::permute_by_cell(double cutoff) {
         cell_of_[i] = cx + cy * grid_nx_;
         ++cell_start_[cell_of_[i] + 1];
     }
-    for (int c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+    for (int c = 0; c < ncell; ++c)
+        cell_start_[c + 1] += cell_start_[c];
     // Counting sort: order_[new index] = old index.
     order_.resize(n);
     std::vector<int>& fill = iscratch_;
     fill.assign(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) order_[fill[cell_of_[i]]++] = int(i);
-    for (auto* col : {&x_, &y_, &vx_, &vy_, &w_, &fx_, &fy_, &tq_, &r_, &m_, &inv_m_, &inv_I_,
-                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+    for (std::size_t i = 0; i < n; ++i)
+        order_[fill[cell_of_[i]]++] = int(i);
+    for (auto* col : {&x_,     &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_, &inv_m_,
+                      &inv_I_, &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
         permute(*col, order_, scratch_);
     permute(id_, order_, iscratch_);
     // cell_of_ in the new order is non-decreasing; rebuild it from the starts.
     for (int c = 0; c < ncell; ++c)
-        for (int i = cell_start_[c]; i < cell_start_[c + 1]; ++i) cell_of_[i] = c;
+        for (int i = cell_start_[c]; i < cell_start_[c + 1]; ++i)
+            cell_of_[i] = c;
 }
 
 void System::build_pairs() {
@@ -672,12 +686,14 @@ void System::build_pairs() {
             const double cut = ri + r_[j] + skin;
             if (dx * dx + dy * dy < cut * cut) pj_.push_back(j);
         };
-        for (int j = int(i) + 1; j < cell_start_[c + 1]; ++j) consider(j);
+        for (int j = int(i) + 1; j < cell_start_[c + 1]; ++j)
+            consider(j);
         for (int s = 0; s < 4; ++s) {
             const int nx = cx + sx[s], ny = cy + sy[s];
             if (nx < 0 || nx >= grid_nx_ || ny >= grid_ny_) continue;
             const int nc = nx + ny * grid_nx_;
-            for (int j = cell_start_[nc]; j < cell_start_[nc + 1]; ++j) consider(j);
+            for (int j = cell_start_[nc]; j < cell_start_[nc + 1]; ++j)
+                consider(j);
         }
     }
     pstart_[n] = int(pj_.size());
@@ -729,7 +745,8 @@ void System::save_history() {
         }
     };
     each_spring([&](int owner, int, double, double) { ++hist_start_[owner + 1]; });
-    for (int k = 0; k < next_id_; ++k) hist_start_[k + 1] += hist_start_[k];
+    for (int k = 0; k < next_id_; ++k)
+        hist_start_[k + 1] += hist_start_[k];
     const int total = hist_start_[next_id_];
     hist_partner_.resize(total);
     hist_x_.resize(total);
@@ -809,8 +826,8 @@ double System::elastic_energy() const {
         }
         for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
             const int j = wj_[k];
-            const double d = std::hypot(x_[i] - wx_[j] - wall_offset_.x(),
-                                        y_[i] - wy_[j] - wall_offset_.y());
+            const double d =
+                std::hypot(x_[i] - wx_[j] - wall_offset_.x(), y_[i] - wy_[j] - wall_offset_.y());
             const double ov = r_[i] + wr_[j] - d;
             if (ov <= 0.0) continue;
             e += 0.5 * config_.wall.k_n * ov * ov;

@@ -165,9 +165,17 @@ TEST(Realization, SettledColumnCarriesItsWeightOnTheWalls) {
     double weight = 0.0;
     for (double m : s.m())
         weight += m * p.gravity;
-    s.run(200);  // a fresh force evaluation at rest
-    // At rest sum F = 0 for every particle, so the walls push up with the total weight. The
-    // residual is the settling tolerance (kinetic energy below 1e-4 m g d): well under 1 %.
-    EXPECT_NEAR(s.wall_force().y(), -weight, 0.01 * weight);
-    EXPECT_NEAR(s.wall_force().x(), 0.0, 0.01 * weight);
+    // Momentum balance: averaged over a window much longer than a contact period (tau_c =
+    // 0.8 ms; the window is 0.05 s), the walls carry exactly the weight of a packing whose
+    // centre of mass does not accelerate. The instantaneous force still rings at the ~1 % level
+    // after the settle criterion (kinetic energy below 1e-4 m g d per particle); the average
+    // must match to 1 %.
+    Vec2 mean = Vec2::Zero();
+    const int steps = 3125;  // 0.05 s at dt = 1.6e-5 s
+    for (int k = 0; k < steps; ++k) {
+        s.step();
+        mean += s.wall_force() / steps;
+    }
+    EXPECT_NEAR(mean.y(), -weight, 0.01 * weight);
+    EXPECT_NEAR(mean.x(), 0.0, 0.01 * weight);
 }

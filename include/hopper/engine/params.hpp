@@ -52,7 +52,7 @@ struct MaterialParams {
 struct IntegratorParams {
     Scheme scheme = Scheme::gear4;
     double steps_per_collision = 50.0;  // delta: dt = tau_c / delta
-    double skin = 0.25;                 // Verlet skin, in units of d_small
+    double skin = 0.4;                  // Verlet skin, in units of d_small (bench_engine)
 };
 
 struct ProtocolParams {
