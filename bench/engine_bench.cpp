@@ -1,7 +1,9 @@
 // Engine speed benchmark (issue 2): ns per particle-step on the two standard full-size scenes,
 // per-phase breakdown, peak memory, and what each thing the engine skips is worth.
 //
-//   bench_engine [--repeats R] [--steps K] [--particles N] [--skips] [--csv FILE]
+//   bench_engine [--repeats R] [--steps K] [--particles N] [--full] [--skips] [--csv FILE]
+//
+//   --full   also run the discharge to the end (the wall time of one whole realization)
 //
 // Scenes (published values: 8750 particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, Gear):
 //   column     the settled packing before the outlet opens (gate closed), K steps per repeat;
@@ -61,7 +63,8 @@ struct Row {
 Sample median_sample(const std::vector<Sample>& s) {
     auto col = [&](double Sample::*f) {
         std::vector<double> v;
-        for (const auto& x : s) v.push_back(x.*f);
+        for (const auto& x : s)
+            v.push_back(x.*f);
         return median(v);
     };
     return {col(&Sample::ns_per_ps), col(&Sample::forces), col(&Sample::integration),
@@ -101,7 +104,7 @@ double realization_ns(const SceneParams& p, std::uint64_t seed, double* wall = n
 
 int main(int argc, char** argv) {
     int repeats = 5, steps = 2000, particles = 8750;
-    bool skips = false;
+    bool skips = false, full_run = false;
     std::string csv;
     for (int a = 1; a < argc; ++a) {
         const std::string arg = argv[a];
@@ -112,22 +115,30 @@ int main(int argc, char** argv) {
             }
             return argv[++a];
         };
-        if (arg == "--repeats") repeats = std::stoi(next());
-        else if (arg == "--steps") steps = std::stoi(next());
-        else if (arg == "--particles") particles = std::stoi(next());
-        else if (arg == "--skips") skips = true;
-        else if (arg == "--csv") csv = next();
+        if (arg == "--repeats")
+            repeats = std::stoi(next());
+        else if (arg == "--steps")
+            steps = std::stoi(next());
+        else if (arg == "--particles")
+            particles = std::stoi(next());
+        else if (arg == "--skips")
+            skips = true;
+        else if (arg == "--full")
+            full_run = true;
+        else if (arg == "--csv")
+            csv = next();
         else {
             std::fprintf(stderr,
-                         "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--skips] "
-                         "[--csv FILE]\n");
+                         "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
+                         "[--skips] [--csv FILE]\n");
             return 2;
         }
     }
 
-    std::printf("hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, "
-                "gear4; medians of %d repeats\n",
-                particles, repeats);
+    std::printf(
+        "hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, "
+        "gear4; medians of %d repeats\n",
+        particles, repeats);
     const double rss0 = peak_rss_mib();
     Realization run(full_scene(particles), 1);
     System& sys = run.system();
@@ -149,7 +160,8 @@ int main(int argc, char** argv) {
     for (int r = 0; r < repeats; ++r) {
         const double n = sys.mobile_count();
         double after = n * steps;
-        column.samples.push_back(timed(sys, 0.0, [&] { sys.run(steps); }, after));
+        column.samples.push_back(timed(
+            sys, 0.0, [&] { sys.run(steps); }, after));
     }
     print(column);
     rows.push_back(column);
@@ -170,26 +182,31 @@ int main(int argc, char** argv) {
     }
     print(discharge);
     rows.push_back(discharge);
-    std::printf("(discharge repeats are consecutive 0.5 s windows from the opening: %d -> %d "
-                "particles in the hopper)\n",
-                particles, sys.mobile_count());
-    while (run.advance(5.0)) {
+    std::printf(
+        "(discharge repeats are consecutive 0.5 s windows from the opening: %d -> %d "
+        "particles in the hopper)\n",
+        particles, sys.mobile_count());
+    if (full_run) {
+        while (run.advance(5.0)) {
+        }
+        const RealizationResult full = run.result();
+        std::printf(
+            "\nfull realization D=4.5 cm theta=60 deg: status %s, empty time %.2f s, %lld "
+            "steps, wall %.1f s (settle included), %.1f ns per particle-step overall\n",
+            to_string(full.status).c_str(), full.empty_time.value_or(-1.0),
+            (long long)full.diagnostics.steps, full.diagnostics.wall_seconds,
+            full.diagnostics.ns_per_particle_step);
     }
-    const RealizationResult full = run.result();
-    std::printf("\nfull realization D=4.5 cm theta=60 deg: status %s, empty time %.2f s, %lld "
-                "steps, wall %.1f s (settle included), %.1f ns per particle-step overall\n",
-                to_string(full.status).c_str(), full.empty_time.value_or(-1.0),
-                (long long)full.diagnostics.steps, full.diagnostics.wall_seconds,
-                full.diagnostics.ns_per_particle_step);
     std::printf("peak memory (max RSS) of the process: %.1f MiB (%.1f MiB before the scene)\n",
                 peak_rss_mib(), rss0);
 
     if (skips) {
         // What skipping is worth: whole mid-size realizations (2000 particles, W = 25 cm,
         // D = 4.5 cm, theta = 60 deg), medians over seeds, as ratios within this run.
-        std::printf("\nwhat each skip is worth (2000 particles, whole realizations, median ns "
-                    "per particle-step over %d seeds):\n",
-                    repeats);
+        std::printf(
+            "\nwhat each skip is worth (2000 particles, whole realizations, median ns "
+            "per particle-step over %d seeds):\n",
+            repeats);
         auto mid = [] {
             SceneParams p = full_scene(2000);
             p.hopper.width = 25.0 * cm;
@@ -224,7 +241,8 @@ int main(int argc, char** argv) {
         double ref = 0.0;
         for (auto& v : variants) {
             std::vector<double> ns;
-            for (int r = 0; r < repeats; ++r) ns.push_back(realization_ns(v.p, 100 + r));
+            for (int r = 0; r < repeats; ++r)
+                ns.push_back(realization_ns(v.p, 100 + r));
             const double m = median(ns);
             if (ref == 0.0) ref = m;
             std::printf("  %-40s %7.1f ns  (x %.2f)\n", v.name, m, m / ref);
