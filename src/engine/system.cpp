@@ -206,6 +206,36 @@ struct KernelImpl final : System::Kernel {
         }
     }
 
+    // One touching contact seen from particle i: separation (dx, dy) = r_i - r_j with
+    // d2 = |r_ij|^2 < rs^2 (the caller tests that first, so that partners out of reach cost a
+    // distance only), the sum of inverse masses (a wall's is 0, so mbar = m_i against a wall),
+    // the spring (hx, hy). Gives the force on i and c = n x F_t, from which both torques
+    // follow (-R c for i and for j).
+    struct Touch {
+        Vec2 F;
+        double c;
+        double overlap;
+    };
+    HOPPER_HOT_INLINE static void touch(const ContactParams& p, double dt, double dx, double dy,
+                                        double d2, double rs, double inv_m_sum, const Vec2& vi,
+                                        const Vec2& vj, double ri, double wi, double rj, double wj,
+                                        double& hx, double& hy, Touch& t) {
+        const double d = std::sqrt(d2);
+        const double inv_d = 1.0 / d;
+        const Vec2 nrm(dx * inv_d, dy * inv_d);
+        t.overlap = rs - d;
+        const double mbar = 1.0 / inv_m_sum;  // m_i m_j / (m_i + m_j)
+        const Vec2 vij = rot ? contact_velocity(vi, vj, ri, wi, rj, wj, nrm) : Vec2(vi - vj);
+        Vec2 spring = Law::has_history ? Vec2(hx, hy) : Vec2::Zero();
+        const ContactForce cf = Law::evaluate(p, mbar, nrm, t.overlap, vij, spring, dt);
+        if constexpr (Law::has_history) {
+            hx = spring.x();
+            hy = spring.y();
+        }
+        t.F = cf.normal + cf.tangential;
+        t.c = rot ? core::cross(nrm, cf.tangential) : 0.0;
+    }
+
     double forces(System& s) override {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
@@ -215,118 +245,84 @@ struct KernelImpl final : System::Kernel {
         const double* vy = s.vy_.data();
         const double* w = s.w_.data();
         const double* r = s.r_.data();
-        const double* m = s.m_.data();
+        const double* im = s.inv_m_.data();
         double* fx = s.fx_.data();
         double* fy = s.fy_.data();
         double* tq = s.tq_.data();
         std::fill(s.fx_.begin(), s.fx_.end(), 0.0);
         std::fill(s.fy_.begin(), s.fy_.end(), 0.0);
         if constexpr (rot) std::fill(s.tq_.begin(), s.tq_.end(), 0.0);
-        const int* ps = s.pstart_.data();
-        const int* pj = s.pj_.data();
         double* hx = s.pxi_x_.data();
         double* hy = s.pxi_y_.data();
-        const ContactParams pp = s.config_.particle;
-        double max_ov = 0.0;
-        int contacts = 0;
-
-        // Mobile-mobile pairs: each pair once, Newton's third law.
-        for (std::size_t i = 0; i < n; ++i) {
-            const double xi = x[i], yi = y[i], ri = r[i], mi = m[i];
-            const Vec2 vi(vx[i], vy[i]);
-            const double wi = rot ? w[i] : 0.0;
-            double fxi = 0.0, fyi = 0.0, tqi = 0.0;
-            for (int k = ps[i]; k < ps[i + 1]; ++k) {
-                const int j = pj[k];
-                const double dx = xi - x[j], dy = yi - y[j];
-                const double rs = ri + r[j];
-                const double d2 = dx * dx + dy * dy;
-                if (d2 >= rs * rs) {
-                    if constexpr (Law::has_history) hx[k] = hy[k] = 0.0;  // contact opened
-                    continue;
-                }
-                const double d = std::sqrt(d2);
-                const double inv_d = 1.0 / d;
-                const Vec2 nrm(dx * inv_d, dy * inv_d);
-                const double overlap = rs - d;
-                const double mbar = mi * m[j] / (mi + m[j]);
-                const Vec2 vj(vx[j], vy[j]);
-                const Vec2 vij =
-                    rot ? contact_velocity(vi, vj, ri, wi, r[j], w[j], nrm) : Vec2(vi - vj);
-                Vec2 spring = Law::has_history ? Vec2(hx[k], hy[k]) : Vec2::Zero();
-                const ContactForce cf = Law::evaluate(pp, mbar, nrm, overlap, vij, spring, dt);
-                if constexpr (Law::has_history) {
-                    hx[k] = spring.x();
-                    hy[k] = spring.y();
-                }
-                const Vec2 F = cf.normal + cf.tangential;
-                fxi += F.x();
-                fyi += F.y();
-                fx[j] -= F.x();
-                fy[j] -= F.y();
-                if constexpr (rot) {
-                    const double c = core::cross(nrm, cf.tangential);
-                    tqi -= ri * c;      // -R_i (n x F_t)
-                    tq[j] -= r[j] * c;  // -R_j (n x F_t): the same form for the partner
-                }
-                max_ov = std::max(max_ov, overlap);
-                ++contacts;
-            }
-            fx[i] += fxi;
-            fy[i] += fyi;
-            if constexpr (rot) tq[i] += tqi;
-        }
-
-        // Mobile-wall pairs: walls are immobile (or move rigidly while shaking), mbar = m_i.
+        double* gx = s.wxi_x_.data();
+        double* gy = s.wxi_y_.data();
+        double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
+        const int* ps = s.pstart_.data();
+        const int* pj = s.pj_.data();
         const int* ws = s.wstart_.data();
         const int* wj = s.wj_.data();
         const double* wx = s.wx_.data();
         const double* wy = s.wy_.data();
         const double* wr = s.wr_.data();
-        double* gx = s.wxi_x_.data();
-        double* gy = s.wxi_y_.data();
-        const ContactParams pw = s.config_.wall;
+        const ContactParams pp = s.config_.particle, pw = s.config_.wall;
         const double ox = s.wall_offset_.x(), oy = s.wall_offset_.y();
         const Vec2 vw = s.wall_velocity_;
-        double wfx = 0.0, wfy = 0.0;
+        double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
+        int contacts = 0;
+        Touch t;
+
         for (std::size_t i = 0; i < n; ++i) {
-            if (ws[i] == ws[i + 1]) continue;
-            const double xi = x[i], yi = y[i], ri = r[i], mi = m[i];
+            const double xi = x[i], yi = y[i], ri = r[i], imi = im[i];
             const Vec2 vi(vx[i], vy[i]);
             const double wi = rot ? w[i] : 0.0;
             double fxi = 0.0, fyi = 0.0, tqi = 0.0;
-            for (int k = ws[i]; k < ws[i + 1]; ++k) {
-                const int j = wj[k];
-                const double dx = xi - (wx[j] + ox), dy = yi - (wy[j] + oy);
-                const double rs = ri + wr[j];
+            // Mobile partners: each pair once, Newton's third law.
+            for (int k = ps[i]; k < ps[i + 1]; ++k) {
+                const int j = pj[k];
+                double& sx = Law::has_history ? hx[k] : no_spring_x;
+                double& sy = Law::has_history ? hy[k] : no_spring_y;
+                const double dx = xi - x[j], dy = yi - y[j], rs = ri + r[j];
                 const double d2 = dx * dx + dy * dy;
                 if (d2 >= rs * rs) {
-                    if constexpr (Law::has_history) gx[k] = gy[k] = 0.0;
+                    sx = sy = 0.0;  // not touching: the spring is forgotten
                     continue;
                 }
-                const double d = std::sqrt(d2);
-                const double inv_d = 1.0 / d;
-                const Vec2 nrm(dx * inv_d, dy * inv_d);
-                const double overlap = rs - d;
-                const Vec2 vij =
-                    rot ? contact_velocity(vi, vw, ri, wi, wr[j], 0.0, nrm) : Vec2(vi - vw);
-                Vec2 spring = Law::has_history ? Vec2(gx[k], gy[k]) : Vec2::Zero();
-                const ContactForce cf = Law::evaluate(pw, mi, nrm, overlap, vij, spring, dt);
-                if constexpr (Law::has_history) {
-                    gx[k] = spring.x();
-                    gy[k] = spring.y();
+                touch(pp, dt, dx, dy, d2, rs, imi + im[j], vi, Vec2(vx[j], vy[j]), ri, wi, r[j],
+                      rot ? w[j] : 0.0, sx, sy, t);
+                fxi += t.F.x();
+                fyi += t.F.y();
+                fx[j] -= t.F.x();
+                fy[j] -= t.F.y();
+                if constexpr (rot) {
+                    tqi -= ri * t.c;      // -R_i (n x F_t)
+                    tq[j] -= r[j] * t.c;  // -R_j (n x F_t): the same form for the partner
                 }
-                const Vec2 F = cf.normal + cf.tangential;
-                fxi += F.x();
-                fyi += F.y();
-                if constexpr (rot) tqi -= ri * core::cross(nrm, cf.tangential);
-                max_ov = std::max(max_ov, overlap);
+                max_ov = std::max(max_ov, t.overlap);
                 ++contacts;
             }
-            fx[i] += fxi;
-            fy[i] += fyi;
-            wfx -= fxi;
-            wfy -= fyi;
+            // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0.
+            double wfxi = 0.0, wfyi = 0.0;
+            for (int k = ws[i]; k < ws[i + 1]; ++k) {
+                const int j = wj[k];
+                double& sx = Law::has_history ? gx[k] : no_spring_x;
+                double& sy = Law::has_history ? gy[k] : no_spring_y;
+                const double dx = xi - (wx[j] + ox), dy = yi - (wy[j] + oy), rs = ri + wr[j];
+                const double d2 = dx * dx + dy * dy;
+                if (d2 >= rs * rs) {
+                    sx = sy = 0.0;
+                    continue;
+                }
+                touch(pw, dt, dx, dy, d2, rs, imi, vi, vw, ri, wi, wr[j], 0.0, sx, sy, t);
+                wfxi += t.F.x();
+                wfyi += t.F.y();
+                if constexpr (rot) tqi -= ri * t.c;
+                max_ov = std::max(max_ov, t.overlap);
+                ++contacts;
+            }
+            fx[i] += fxi + wfxi;
+            fy[i] += fyi + wfyi;
+            wfx -= wfxi;
+            wfy -= wfyi;
             if constexpr (rot) tq[i] += tqi;
         }
         s.wall_force_ = Vec2(wfx, wfy);
