@@ -3,7 +3,9 @@
 namespace hopper::core {
 
 namespace {
-inline std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+inline std::uint64_t rotl(std::uint64_t x, int k) {
+    return (x << k) | (x >> (64 - k));
+}
 }  // namespace
 
 std::uint64_t splitmix64(std::uint64_t& state) {
@@ -30,7 +32,8 @@ std::uint64_t mix_seed(std::uint64_t seed, std::string_view text) {
 
 Rng::Rng(std::uint64_t seed) {
     std::uint64_t sm = seed;
-    for (auto& s : s_) s = splitmix64(sm);
+    for (auto& s : s_)
+        s = splitmix64(sm);
 }
 
 std::uint64_t Rng::next_u64() {
@@ -46,6 +49,8 @@ std::uint64_t Rng::next_u64() {
     return result;
 }
 
-double Rng::uniform() { return static_cast<double>(next_u64() >> 11) * 0x1.0p-53; }
+double Rng::uniform() {
+    return static_cast<double>(next_u64() >> 11) * 0x1.0p-53;
+}
 
 }  // namespace hopper::core

@@ -10,7 +10,9 @@ namespace hopper::engine {
 using core::ConfigError;
 using core::pi;
 
-std::string to_string(Scheme s) { return s == Scheme::gear4 ? "gear4" : "verlet"; }
+std::string to_string(Scheme s) {
+    return s == Scheme::gear4 ? "gear4" : "verlet";
+}
 
 namespace {
 
@@ -62,7 +64,8 @@ void validate_scene(const SceneParams& p) {
     require_range("material.kt_over_kn", m.kt_over_kn, 0.0, 10.0);
     require_range("material.youngs_modulus", m.youngs_modulus, 0.0, 1e13, true, " Pa");
     require_range("material.poisson_ratio", m.poisson_ratio, -1.0, 0.5);
-    if (m.collision_time) require_range("material.collision_time", *m.collision_time, 0.0, 1.0, true, " s");
+    if (m.collision_time)
+        require_range("material.collision_time", *m.collision_time, 0.0, 1.0, true, " s");
     require_range("integrator.steps_per_collision", p.integrator.steps_per_collision, 2.0, 1e5);
     require_range("integrator.skin", p.integrator.skin, 0.0, 10.0, true);
     require_range("gravity", p.gravity, 0.0, 1e3, true, " m/s^2");
@@ -83,9 +86,9 @@ void validate_scene(const SceneParams& p) {
     require_range("protocol.max_time", pr.max_time, 0.0, 1e7, true, " s");
     require_range("protocol.exit_depth", pr.exit_depth, pr.jam_region_height, 1000.0, true);
     if (pr.empty_threshold < 0 || pr.empty_threshold >= s.count)
-        throw ConfigError("parameter protocol.empty_threshold = " +
-                          std::to_string(pr.empty_threshold) + " is out of range: allowed [0, " +
-                          std::to_string(s.count - 1) + "]");
+        throw ConfigError(
+            "parameter protocol.empty_threshold = " + std::to_string(pr.empty_threshold) +
+            " is out of range: allowed [0, " + std::to_string(s.count - 1) + "]");
     require_range("protocol.sample_interval", pr.sample_interval, 0.0, 1e3, true, " s");
     require_range("protocol.max_overlap", pr.max_overlap, 0.0, 1.0, true);
 }
@@ -98,10 +101,11 @@ double hertz_collision_time(double m, double d, double youngs_modulus, double po
     //                = Gamma(1/p) Gamma(1/2) / (p Gamma(1/p + 1/2)).
     const double b = 0.5;
     const double p = 2.0 + b;
-    const double I_b = 2.0 * std::tgamma(1.0 / p) * std::sqrt(pi) / (p * std::tgamma(1.0 / p + 0.5));
+    const double I_b =
+        2.0 * std::tgamma(1.0 / p) * std::sqrt(pi) / (p * std::tgamma(1.0 / p + 0.5));
     const double E = youngs_modulus / (3.0 * (1.0 - poisson_ratio * poisson_ratio));
-    return I_b * std::pow((1.0 + b) / 2.0, 1.0 / p) * std::pow(m / (E * std::pow(d, 1.0 - b)), 1.0 / p) *
-           std::pow(v0, -b / p);
+    return I_b * std::pow((1.0 + b) / 2.0, 1.0 / p) *
+           std::pow(m / (E * std::pow(d, 1.0 - b)), 1.0 / p) * std::pow(v0, -b / p);
 }
 
 DerivedConstants derive_constants(const SceneParams& p) {
@@ -116,14 +120,15 @@ DerivedConstants derive_constants(const SceneParams& p) {
     c.I_large = c.m_large * s.d_large * s.d_large / 8.0;
     const double v0 = std::sqrt(2.0 * p.gravity * s.d_large);
     // For Poisson ratio 0.5 (incompressible) E = Y/(3 * 0.75) is finite; at sigma -> +-1 it is not.
-    c.hertz_time = (std::abs(mat.poisson_ratio) < 1.0)
-                       ? hertz_collision_time(c.m_large, s.d_large, mat.youngs_modulus,
-                                              mat.poisson_ratio, v0)
-                       : 0.0;
+    c.hertz_time =
+        (std::abs(mat.poisson_ratio) < 1.0)
+            ? hertz_collision_time(c.m_large, s.d_large, mat.youngs_modulus, mat.poisson_ratio, v0)
+            : 0.0;
     c.tau_c = mat.collision_time.value_or(c.hertz_time);
     if (!(c.tau_c > 0.0))
-        throw core::ConfigError("the collision time could not be derived from the material "
-                                "(poisson_ratio must be in (-1, 0.5]); give material.collision_time_s");
+        throw core::ConfigError(
+            "the collision time could not be derived from the material "
+            "(poisson_ratio must be in (-1, 0.5]); give material.collision_time_s");
     // tau_c = pi sqrt(m_large / (2 k_n))  =>  k_n = m_large pi^2 / (2 tau_c^2)
     c.k_n = c.m_large * pi * pi / (2.0 * c.tau_c * c.tau_c);
     c.k_t = mat.kt_over_kn * c.k_n;

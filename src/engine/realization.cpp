@@ -15,33 +15,48 @@ namespace hopper::engine {
 
 std::string to_string(Status s) {
     switch (s) {
-        case Status::complete: return "complete";
-        case Status::arrested: return "arrested";
-        case Status::time_limit: return "time_limit";
-        case Status::failed: return "failed";
+        case Status::complete:
+            return "complete";
+        case Status::arrested:
+            return "arrested";
+        case Status::time_limit:
+            return "time_limit";
+        case Status::failed:
+            return "failed";
     }
     return "unknown";
 }
 
 std::string to_string(Event::Kind k) {
     switch (k) {
-        case Event::Kind::settled: return "settled";
-        case Event::Kind::opened: return "opened";
-        case Event::Kind::jam: return "jam";
-        case Event::Kind::shake_start: return "shake_start";
-        case Event::Kind::shake_end: return "shake_end";
-        case Event::Kind::flow_restart: return "flow_restart";
-        case Event::Kind::empty: return "empty";
-        case Event::Kind::stop: return "stop";
+        case Event::Kind::settled:
+            return "settled";
+        case Event::Kind::opened:
+            return "opened";
+        case Event::Kind::jam:
+            return "jam";
+        case Event::Kind::shake_start:
+            return "shake_start";
+        case Event::Kind::shake_end:
+            return "shake_end";
+        case Event::Kind::flow_restart:
+            return "flow_restart";
+        case Event::Kind::empty:
+            return "empty";
+        case Event::Kind::stop:
+            return "stop";
     }
     return "unknown";
 }
 
 std::string_view to_string(Phase p) {
     switch (p) {
-        case Phase::settle: return "settle";
-        case Phase::discharge: return "discharge";
-        case Phase::shake: return "shake";
+        case Phase::settle:
+            return "settle";
+        case Phase::discharge:
+            return "discharge";
+        case Phase::shake:
+            return "shake";
     }
     return "unknown";
 }
@@ -104,10 +119,10 @@ struct Realization::Impl {
 
     // Discharge clocks and detector state (discharge time td excludes shaking).
     double td = 0.0;
-    double flow_start = 0.0;    // td at which the current survival interval began
-    double last_occupied = 0.0; // td at which the region last held a particle
-    double check_start = 0.0;   // td at which the post-shake check began
-    double shake_start = 0.0;   // sim time at which the current shake began
+    double flow_start = 0.0;     // td at which the current survival interval began
+    double last_occupied = 0.0;  // td at which the region last held a particle
+    double check_start = 0.0;    // td at which the post-shake check began
+    double shake_start = 0.0;    // sim time at which the current shake began
     int shakes_this_jam = 0;
     std::vector<std::pair<double, double>> jammed;  // [onset, restart) in td
     std::vector<double> exit_mass;
@@ -115,8 +130,8 @@ struct Realization::Impl {
     std::int64_t step_count = 0;
     std::int64_t k_detect = 1, k_sample = 1, k_settle = 1;
     double next_snapshot = 0.0, next_progress = 0.0;
-    double ke_limit = 0.0;       // mean KE per particle beyond which we call it a blow-up
-    double y_region = 0.0;       // the detector region is |x| < D/2, y_region < y < 0
+    double ke_limit = 0.0;  // mean KE per particle beyond which we call it a blow-up
+    double y_region = 0.0;  // the detector region is |x| < D/2, y_region < y < 0
 
     Impl(const SceneParams& params, std::uint64_t seed, RunHooks h)
         : p(params), hooks(std::move(h)), wall_start(Clock::now()) {
@@ -130,8 +145,10 @@ struct Realization::Impl {
         core::Rng rng(seed);
         const SceneLayout layout = build_scene(p, rng);
         sys = std::make_unique<System>(system_config(p, c));
-        for (const auto& w : layout.walls) sys->add_wall(w.pos, w.diameter);
-        for (const auto& w : layout.gate) gate_ids.push_back(sys->add_wall(w.pos, w.diameter));
+        for (const auto& w : layout.walls)
+            sys->add_wall(w.pos, w.diameter);
+        for (const auto& w : layout.gate)
+            gate_ids.push_back(sys->add_wall(w.pos, w.diameter));
         for (const auto& f : layout.fill) {
             const double m = f.large ? c.m_large : c.m_small;
             const double I = f.large ? c.I_large : c.I_small;
@@ -205,8 +222,10 @@ struct Realization::Impl {
     void snapshot() {
         std::vector<double> wx(sys->wall_x().begin(), sys->wall_x().end());
         std::vector<double> wy(sys->wall_y().begin(), sys->wall_y().end());
-        for (auto& v : wx) v += sys->wall_offset().x();
-        for (auto& v : wy) v += sys->wall_offset().y();
+        for (auto& v : wx)
+            v += sys->wall_offset().x();
+        for (auto& v : wy)
+            v += sys->wall_offset().y();
         hooks.on_snapshot({phase, sys->time(), td, sys->ids(), sys->x(), sys->y(), sys->vx(),
                            sys->vy(), sys->w(), sys->r(), wx, wy, sys->wall_r()});
     }
@@ -335,7 +354,8 @@ struct Realization::Impl {
                 }
                 break;
             case Flow::shaking:
-            case Flow::ended: break;
+            case Flow::ended:
+                break;
         }
     }
 
@@ -343,9 +363,9 @@ struct Realization::Impl {
         res.shakes_per_jam.back() = shakes_this_jam;
         res.status = Status::arrested;
         std::ostringstream msg;
-        msg << "jam at t = " << res.jam_onsets.back() << " s not cleared after "
-            << shakes_this_jam << " shake(s) (protocol.max_shakes = " << p.protocol.max_shakes
-            << "); " << sys->mobile_count() << " particles left";
+        msg << "jam at t = " << res.jam_onsets.back() << " s not cleared after " << shakes_this_jam
+            << " shake(s) (protocol.max_shakes = " << p.protocol.max_shakes << "); "
+            << sys->mobile_count() << " particles left";
         res.message = msg.str();
         jammed.back().second = td;
         end_run(Event::Kind::stop);
@@ -446,9 +466,8 @@ struct Realization::Impl {
 
     RealizationResult result() const {
         RealizationResult out = res;
-        out.n_jams_multi_shake = int(std::count_if(out.shakes_per_jam.begin(),
-                                                   out.shakes_per_jam.end(),
-                                                   [](int n) { return n > 1; }));
+        out.n_jams_multi_shake = int(std::count_if(
+            out.shakes_per_jam.begin(), out.shakes_per_jam.end(), [](int n) { return n > 1; }));
         auto& d = out.diagnostics;
         d.steps = step_count;
         d.neighbor_rebuilds = sys->neighbor_rebuilds();
@@ -464,7 +483,8 @@ struct Realization::Impl {
         // Potential energy released: from the fill to now, removed particles counted at the
         // removal floor.
         double removed_mass = 0.0;
-        for (double m : exit_mass) removed_mass += m;
+        for (double m : exit_mass)
+            removed_mass += m;
         d.potential_energy_released =
             res.diagnostics.potential_energy_released -
             (sys->potential_energy() +
@@ -506,13 +526,21 @@ bool Realization::advance(double discharge_seconds) {
     }
 }
 
-bool Realization::finished() const { return impl_->ended(); }
+bool Realization::finished() const {
+    return impl_->ended();
+}
 
-RealizationResult Realization::result() const { return impl_->result(); }
+RealizationResult Realization::result() const {
+    return impl_->result();
+}
 
-System& Realization::system() { return *impl_->sys; }
+System& Realization::system() {
+    return *impl_->sys;
+}
 
-Phase Realization::phase() const { return impl_->phase; }
+Phase Realization::phase() const {
+    return impl_->phase;
+}
 
 RealizationResult run_realization(const SceneParams& params, std::uint64_t seed,
                                   const RunHooks& hooks) {

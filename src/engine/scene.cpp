@@ -13,14 +13,17 @@ namespace {
 // theta within this of 90 deg is treated as exactly vertical (a slot of free width D).
 constexpr double vertical_tolerance = 1e-9;
 
-bool is_slot(const HopperGeometry& g) { return g.theta >= core::pi / 2 - vertical_tolerance; }
+bool is_slot(const HopperGeometry& g) {
+    return g.theta >= core::pi / 2 - vertical_tolerance;
+}
 
 // Places particles of diameter d at arc-length steps of at most `spacing` along the polyline
 // `pts` (both ends included), mirrored to the left side when `mirror`.
 void place_along(const std::vector<Vec2>& pts, double spacing, double d, bool mirror,
                  std::vector<WallParticle>& out) {
     double total = 0.0;
-    for (std::size_t k = 1; k < pts.size(); ++k) total += (pts[k] - pts[k - 1]).norm();
+    for (std::size_t k = 1; k < pts.size(); ++k)
+        total += (pts[k] - pts[k - 1]).norm();
     const int n = std::max(1, int(std::ceil(total / spacing - 1e-9)));
     const double step = total / n;
     std::size_t seg = 1;

@@ -37,23 +37,23 @@ struct Point {
     std::vector<ParamSetting> settings;  // canonical order: D_cm, theta_deg, then by name
     engine::SceneParams scene;           // the base scene with the settings applied, validated
     int realizations = 0;
-    std::string label;                   // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
+    std::string label;  // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
 };
 
 struct CampaignSpec {
     std::string name;
-    std::filesystem::path store;    // resolved relative to the sweep file's directory
+    std::filesystem::path store;  // resolved relative to the sweep file's directory
     std::uint64_t seed = 0;
-    int realizations = 1;           // default per point
+    int realizations = 1;  // default per point
     std::vector<Point> points;
 };
 
 struct SweepFile {
-    std::filesystem::path path;     // as given ("<string>" when parsed from text)
-    std::string text;               // the file's full text (provenance)
-    engine::SceneParams base;       // the scene sections, validated
-    bool has_campaign = false;      // a [campaign] section was present
-    CampaignSpec campaign;          // filled when has_campaign (points from [sweep]/[[points]])
+    std::filesystem::path path;  // as given ("<string>" when parsed from text)
+    std::string text;            // the file's full text (provenance)
+    engine::SceneParams base;    // the scene sections, validated
+    bool has_campaign = false;   // a [campaign] section was present
+    CampaignSpec campaign;       // filled when has_campaign (points from [sweep]/[[points]])
 };
 
 // Parses and validates. Throws core::ConfigError (file, key, value, allowed range).
@@ -65,10 +65,10 @@ engine::SceneParams scene_at(const SweepFile& sweep, double D_cm, double theta_d
 
 // One realization to run.
 struct Task {
-    int task_id;        // index in the list
+    int task_id;  // index in the list
     int point_index;
-    int realization;    // 0-based within the point
-    std::uint64_t seed; // derived from (campaign seed, point's settings, realization)
+    int realization;     // 0-based within the point
+    std::uint64_t seed;  // derived from (campaign seed, point's settings, realization)
 };
 
 // Same list on every rank; a task's seed depends only on the campaign seed, its point's

@@ -8,25 +8,25 @@
 namespace hopper::core {
 
 class Error : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
 // A sweep file, command line or parameter set that is not allowed.
 class ConfigError : public Error {
-public:
+  public:
     using Error::Error;
 };
 
 // A simulation that cannot go on (non-finite state, overlap blow-up, ...).
 class SimulationError : public Error {
-public:
+  public:
     using Error::Error;
 };
 
 // A store that cannot be read or written.
 class StoreError : public Error {
-public:
+  public:
     using Error::Error;
 };
 

@@ -18,7 +18,7 @@ std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t value);
 std::uint64_t mix_seed(std::uint64_t seed, std::string_view text);
 
 class Rng {
-public:
+  public:
     explicit Rng(std::uint64_t seed);
 
     std::uint64_t next_u64();
@@ -27,7 +27,7 @@ public:
     // Uniform in [lo, hi).
     double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
 
-private:
+  private:
     std::uint64_t s_[4];
 };
 

@@ -53,9 +53,8 @@ struct FrictionlessLaw {
     static constexpr bool has_tangential = false;
     static constexpr bool has_history = false;
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
-                                                   const Vec2& n, double overlap,
-                                                   const Vec2& v_ij, Vec2& /*xi*/,
-                                                   double /*dt*/) {
+                                                   const Vec2& n, double overlap, const Vec2& v_ij,
+                                                   Vec2& /*xi*/, double /*dt*/) {
         return {normal_force(p, mbar, n, overlap, v_ij.dot(n)), Vec2::Zero()};
     }
 };
@@ -66,9 +65,8 @@ struct ViscousFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = false;
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
-                                                   const Vec2& n, double overlap,
-                                                   const Vec2& v_ij, Vec2& /*xi*/,
-                                                   double /*dt*/) {
+                                                   const Vec2& n, double overlap, const Vec2& v_ij,
+                                                   Vec2& /*xi*/, double /*dt*/) {
         const double v_n = v_ij.dot(n);
         const double fn = normal_magnitude(p, mbar, overlap, v_n);
         const Vec2 v_t = v_ij - v_n * n;
@@ -87,8 +85,8 @@ struct SpringFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
-                                                   const Vec2& n, double overlap,
-                                                   const Vec2& v_ij, Vec2& xi, double dt) {
+                                                   const Vec2& n, double overlap, const Vec2& v_ij,
+                                                   Vec2& xi, double dt) {
         const double v_n = v_ij.dot(n);
         const double fn = normal_magnitude(p, mbar, overlap, v_n);
         const Vec2 v_t = v_ij - v_n * n;
@@ -111,8 +109,8 @@ struct SpringFrictionLaw {
 
 // Relative velocity of the contact points of i and j (n points from j to i):
 // v_ij = v_i - v_j - (R_i w_i + R_j w_j) (z x n)   (spec/physics.md)
-HOPPER_HOT_INLINE Vec2 contact_velocity(const Vec2& v_i, const Vec2& v_j, double R_i, double w_i, double R_j,
-                             double w_j, const Vec2& n) {
+HOPPER_HOT_INLINE Vec2 contact_velocity(const Vec2& v_i, const Vec2& v_j, double R_i, double w_i,
+                                        double R_j, double w_j, const Vec2& n) {
     return v_i - v_j - (R_i * w_i + R_j * w_j) * core::perp(n);
 }
 

@@ -18,20 +18,20 @@ enum class Scheme { gear4, verlet };
 std::string to_string(Scheme s);
 
 struct HopperGeometry {
-    double width = 43.0 * cm;         // W: total inner width between the side walls
-    double outlet = 4.5 * cm;         // D: free gap between the innermost wall particles
-    double theta = 60.0 * deg;        // wall angle to the horizontal, [0, 90] deg
+    double width = 43.0 * cm;           // W: total inner width between the side walls
+    double outlet = 4.5 * cm;           // D: free gap between the innermost wall particles
+    double theta = 60.0 * deg;          // wall angle to the horizontal, [0, 90] deg
     double wall_diameter = 0.770 * cm;  // diameter of wall particles (default d_large)
-    double wall_spacing = 1.0;        // centre distance of wall particles / wall_diameter
+    double wall_spacing = 1.0;          // centre distance of wall particles / wall_diameter
 };
 
 struct ParticleSpec {
-    int count = 8750;                 // N
-    double small_fraction = 0.62;     // number fraction of small disks
+    int count = 8750;              // N
+    double small_fraction = 0.62;  // number fraction of small disks
     double d_small = 0.602 * cm;
     double d_large = 0.770 * cm;
-    double thickness = 0.32 * cm;     // h: disk thickness (sets the mass)
-    double density = 1000.0;          // rho, kg/m^3
+    double thickness = 0.32 * cm;  // h: disk thickness (sets the mass)
+    double density = 1000.0;       // rho, kg/m^3
 };
 
 struct SurfaceMaterial {
@@ -40,11 +40,11 @@ struct SurfaceMaterial {
 };
 
 struct MaterialParams {
-    SurfaceMaterial system;        // particle-particle contacts
-    SurfaceMaterial wall;          // particle-wall contacts
-    double kt_over_kn = 0.8;       // k_t / k_n; 0 = viscous (kinetic) friction only
-    double youngs_modulus = 4.8e6; // Y, Pa
-    double poisson_ratio = 0.5;    // sigma
+    SurfaceMaterial system;         // particle-particle contacts
+    SurfaceMaterial wall;           // particle-wall contacts
+    double kt_over_kn = 0.8;        // k_t / k_n; 0 = viscous (kinetic) friction only
+    double youngs_modulus = 4.8e6;  // Y, Pa
+    double poisson_ratio = 0.5;     // sigma
     // tau_c given directly (the published study: 8.0e-4 s); unset = from the Hertz formula.
     std::optional<double> collision_time;
 };
@@ -57,30 +57,30 @@ struct IntegratorParams {
 
 struct ProtocolParams {
     // Fill (lattice spacing d_large + fill_gap; random velocities up to fill_speed).
-    double fill_gap = 0.05;            // in units of d_large
-    double fill_speed = 0.05;          // m/s, max initial speed per component
+    double fill_gap = 0.05;    // in units of d_large
+    double fill_speed = 0.05;  // m/s, max initial speed per component
     // Settle with the outlet closed until the mean kinetic energy per particle stays below
     // settle_ke * m_large g d_large for settle_hold seconds; give up after settle_max_time.
     double settle_ke = 1e-4;
-    double settle_hold = 0.05;         // s
-    double settle_max_time = 20.0;     // s
+    double settle_hold = 0.05;      // s
+    double settle_max_time = 20.0;  // s
     // Jam detection: region |x| < D/2, -jam_region_height < y < 0 (units of d_large).
     double jam_region_height = 2.0;
-    std::optional<double> t_check;     // s; unset = 2 sqrt(d_large / g)
-    double detector_interval = 1e-4;   // s between looks at the region
+    std::optional<double> t_check;    // s; unset = 2 sqrt(d_large / g)
+    double detector_interval = 1e-4;  // s between looks at the region
     // Unjamming: one sinusoidal oscillation of the whole hopper per shake.
-    double shake_amplitude = 0.25;     // in units of d_large
-    double shake_period = 0.05;        // s
+    double shake_amplitude = 0.25;        // in units of d_large
+    double shake_period = 0.05;           // s
     double shake_direction = 90.0 * deg;  // angle to the horizontal (90 deg = vertical)
-    int max_shakes = 10;               // shakes per jam before the realization is "arrested"
-    double max_time = 600.0;           // s of discharge (shaking excluded) before "time_limit"
+    int max_shakes = 10;                  // shakes per jam before the realization is "arrested"
+    double max_time = 600.0;              // s of discharge (shaking excluded) before "time_limit"
     // A particle this far below the outlet (units of d_large) has left and is removed.
     double exit_depth = 4.0;
     // The hopper counts as empty when at most this many particles are left in it.
     int empty_threshold = 0;
-    double sample_interval = 0.01;     // s between samples of the discharge curve
+    double sample_interval = 0.01;  // s between samples of the discharge curve
     // Numerical guards.
-    double max_overlap = 0.25;         // largest allowed overlap / d_small
+    double max_overlap = 0.25;  // largest allowed overlap / d_small
 };
 
 struct SceneParams {
@@ -97,16 +97,16 @@ void validate_scene(const SceneParams& p);
 
 // Quantities derived once from the parameters (spec/physics.md, material and stiffness).
 struct DerivedConstants {
-    double m_small, m_large;    // kg
-    double I_small, I_large;    // kg m^2, I = m d^2 / 8
-    double hertz_time;          // s, t_col of the Hertz formula for two large disks
-    double tau_c;               // s, the collision time used
-    double k_n;                 // N/m, tau_c = pi sqrt(m_large / (2 k_n))
-    double k_t;                 // N/m
-    double gamma_n_system;      // 1/s, -2 ln(e_n) / tau_c
+    double m_small, m_large;  // kg
+    double I_small, I_large;  // kg m^2, I = m d^2 / 8
+    double hertz_time;        // s, t_col of the Hertz formula for two large disks
+    double tau_c;             // s, the collision time used
+    double k_n;               // N/m, tau_c = pi sqrt(m_large / (2 k_n))
+    double k_t;               // N/m
+    double gamma_n_system;    // 1/s, -2 ln(e_n) / tau_c
     double gamma_n_wall;
-    double dt;                  // s, tau_c / delta
-    double t_check;             // s
+    double dt;       // s, tau_c / delta
+    double t_check;  // s
 };
 
 DerivedConstants derive_constants(const SceneParams& p);

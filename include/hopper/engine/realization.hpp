@@ -53,7 +53,7 @@ class System;
 // Construction builds the scene and the fill. Numerical failures (core::SimulationError) are
 // recorded, not thrown: after one, every further call does nothing and result() says failed.
 class Realization {
-public:
+  public:
     Realization(const SceneParams& params, std::uint64_t seed, RunHooks hooks = {});
     ~Realization();
     Realization(const Realization&) = delete;
@@ -72,7 +72,7 @@ public:
     System& system();
     Phase phase() const;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

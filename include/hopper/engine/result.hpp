@@ -22,24 +22,24 @@ std::string to_string(Status s);
 struct Event {
     enum class Kind { settled, opened, jam, shake_start, shake_end, flow_restart, empty, stop };
     Kind kind;
-    double time;         // discharge time (shaking excluded)
-    double sim_time;     // total simulated time since the fill (settling and shaking included)
-    int in_hopper;       // particles left in the hopper at that moment
+    double time;      // discharge time (shaking excluded)
+    double sim_time;  // total simulated time since the fill (settling and shaking included)
+    int in_hopper;    // particles left in the hopper at that moment
 };
 
 std::string to_string(Event::Kind k);
 
 struct Diagnostics {
-    std::int64_t steps = 0;          // all steps (settle + discharge + shaking)
+    std::int64_t steps = 0;  // all steps (settle + discharge + shaking)
     std::int64_t settle_steps = 0;
     std::int64_t neighbor_rebuilds = 0;
-    double particle_steps = 0.0;     // sum over steps of the mobile particles integrated
-    double settle_time = 0.0;        // simulated seconds of settling
-    double shake_time = 0.0;         // simulated seconds spent shaking
-    double wall_seconds = 0.0;       // wall-clock time of the whole realization
+    double particle_steps = 0.0;  // sum over steps of the mobile particles integrated
+    double settle_time = 0.0;     // simulated seconds of settling
+    double shake_time = 0.0;      // simulated seconds spent shaking
+    double wall_seconds = 0.0;    // wall-clock time of the whole realization
     double ns_per_particle_step = 0.0;
-    double max_overlap_ratio = 0.0;  // largest overlap seen / d_small
-    double settled_kinetic_energy = 0.0;  // J, mean per particle when settled
+    double max_overlap_ratio = 0.0;          // largest overlap seen / d_small
+    double settled_kinetic_energy = 0.0;     // J, mean per particle when settled
     double potential_energy_released = 0.0;  // J, m g dy of all particles, fill to end
     double dt = 0.0;
     double tau_c = 0.0;
@@ -55,22 +55,22 @@ struct RealizationResult {
     Status status = Status::failed;
     std::string message;
     std::uint64_t seed = 0;
-    int particles = 0;        // N at the fill
-    int wall_particles = 0;   // immobile particles (after the outlet opened)
+    int particles = 0;       // N at the fill
+    int wall_particles = 0;  // immobile particles (after the outlet opened)
     // Survival intervals in order; the last one is right-censored when the hopper emptied,
     // or when the realization stopped for another reason while flowing.
     std::vector<double> survival_times;
     std::vector<bool> censored;
-    std::vector<double> jam_onsets;       // discharge time of each jam's onset
-    std::vector<int> shakes_per_jam;      // shakes used on each jam (same length as jam_onsets)
+    std::vector<double> jam_onsets;   // discharge time of each jam's onset
+    std::vector<int> shakes_per_jam;  // shakes used on each jam (same length as jam_onsets)
     int n_jams = 0;
     int n_shakes = 0;
-    int n_jams_multi_shake = 0;           // jams that needed more than one shake
-    std::optional<double> empty_time;     // set only when the hopper emptied
-    std::optional<double> discharge_rate; // particles/s over the steady part
-    double discharge_rate_mass = 0.0;     // kg/s over the steady part (0 when no rate)
+    int n_jams_multi_shake = 0;            // jams that needed more than one shake
+    std::optional<double> empty_time;      // set only when the hopper emptied
+    std::optional<double> discharge_rate;  // particles/s over the steady part
+    double discharge_rate_mass = 0.0;      // kg/s over the steady part (0 when no rate)
     int discharged = 0;
-    std::vector<double> exit_times;       // discharge time at which each particle left
+    std::vector<double> exit_times;  // discharge time at which each particle left
     // Discharge curve: particles in the hopper sampled every sample_interval of discharge time.
     std::vector<double> curve_time;
     std::vector<int> curve_count;

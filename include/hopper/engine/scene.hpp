@@ -36,9 +36,9 @@ struct SceneLayout {
     std::vector<WallParticle> walls;  // funnel and side walls
     std::vector<WallParticle> gate;   // closes the outlet while settling; removed at opening
     std::vector<FillParticle> fill;
-    double funnel_height = 0.0;       // height where the funnel meets the side walls (m)
-    double fill_top = 0.0;            // highest fill centre (m)
-    double wall_top = 0.0;            // top of the side walls (m)
+    double funnel_height = 0.0;  // height where the funnel meets the side walls (m)
+    double fill_top = 0.0;       // highest fill centre (m)
+    double wall_top = 0.0;       // top of the side walls (m)
 };
 
 // Half of the free width of the container at height y >= 0 (distance from the axis to the inner

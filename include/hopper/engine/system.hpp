@@ -20,13 +20,13 @@
 namespace hopper::engine {
 
 struct SystemConfig {
-    double dt = 1e-5;                     // s
+    double dt = 1e-5;  // s
     Scheme scheme = Scheme::verlet;
-    ContactParams particle;               // particle-particle contacts
-    ContactParams wall;                   // particle-wall contacts
+    ContactParams particle;  // particle-particle contacts
+    ContactParams wall;      // particle-wall contacts
     Vec2 gravity{0.0, -core::standard_gravity};
-    double skin = 1e-3;                   // m, Verlet skin of the neighbour list
-    double max_overlap = 0.0;             // m; > 0: a larger overlap stops the run (SimulationError)
+    double skin = 1e-3;        // m, Verlet skin of the neighbour list
+    double max_overlap = 0.0;  // m; > 0: a larger overlap stops the run (SimulationError)
 };
 
 // A particle that left through the removal floor.
@@ -40,7 +40,7 @@ struct PhaseSeconds {
 };
 
 class System {
-public:
+  public:
     explicit System(const SystemConfig& config);
     ~System();
     System(const System&) = delete;
@@ -122,7 +122,7 @@ public:
     // Implementation detail: the kernel chosen at setup (law x integrator).
     struct Kernel;
 
-private:
+  private:
     template <class Law, Scheme S>
     friend struct KernelImpl;
 
@@ -140,11 +140,11 @@ private:
     SystemConfig config_;
     std::unique_ptr<Kernel> kernel_;
     double time_ = 0.0;
-    bool ready_ = false;         // forces and integrator history initialised
+    bool ready_ = false;  // forces and integrator history initialised
     bool need_rebuild_ = true;
     bool walls_changed_ = true;
     bool history_saved_ = false;  // save_history() already ran for the coming rebuild
-    bool history_ = false;       // keep tangential springs (k_t > 0 and mu > 0)
+    bool history_ = false;        // keep tangential springs (k_t > 0 and mu > 0)
     int next_id_ = 0;
 
     // Mobile particle columns.
