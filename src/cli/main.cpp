@@ -1,8 +1,9 @@
 // The `campaign` executable: parses the command line and dispatches to a command. Nothing else
 // lives here; the commands are in src/cli/<command>.cpp.
 //
-// Exit codes: 0 success, 1 unexpected error (I/O, internal), 2 bad command line or sweep file,
-// 3 the realization failed (simulate).
+// Exit codes: 0 success, 1 unexpected error (I/O, store, internal), 2 bad command line or sweep
+// file (or a store refused for different physics), 3 the realization failed (simulate) or some
+// realizations failed (run), 4 stopped by a signal (run; resumable).
 
 #include <boost/program_options.hpp>
 #include <iostream>
@@ -11,7 +12,9 @@
 #include <vector>
 
 #include "cli/options.hpp"
+#include "cli/run.hpp"
 #include "cli/simulate.hpp"
+#include "cli/status.hpp"
 #include "hopper/core/error.hpp"
 
 #ifndef HOPPER_VERSION
@@ -30,8 +33,10 @@ struct Command {
     std::string_view summary;
 };
 
-// The commands this build has (run/status/analyze/submit come with their own issues).
+// The commands this build has (analyze/submit come with their own issues).
 constexpr Command commands[] = {
+    {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)"},
+    {"status", "progress and failures of a store (works while a run writes it)"},
     {"simulate", "run one realization of one scene of a sweep file (no MPI)"},
 };
 
@@ -48,8 +53,8 @@ void print_usage(std::ostream& os) {
           "commands:\n";
     for (const auto& c : commands)
         os << "  " << c.name << std::string(12 - c.name.size(), ' ') << c.summary << '\n';
-    os << "\nexit codes: 0 success, 1 unexpected error, 2 bad command line or sweep file,\n"
-          "            3 the realization failed\n";
+    os << "\nexit codes: 0 success, 1 unexpected or store error, 2 bad command line or sweep\n"
+          "            file, 3 realization(s) failed, 4 stopped by a signal (run; resumable)\n";
 }
 
 po::options_description simulate_options() {
@@ -167,12 +172,27 @@ int main(int argc, char** argv) {
                 print_simulate_help(std::cout);
                 return 0;
             }
+            if (args[1] == "run") {
+                hopper::cli::print_run_help(std::cout);
+                return 0;
+            }
+            if (args[1] == "status") {
+                hopper::cli::print_status_help(std::cout);
+                return 0;
+            }
             return error("no help for unknown command '" + args[1] +
                              "' (available: " + available_commands() + ")",
                          exit_usage);
         }
         const std::vector<std::string> rest(args.begin() + 1, args.end());
         if (command == "simulate") return simulate_command(rest);
+        if (command == "run") {
+            std::string line = "campaign";
+            for (const auto& a : args)
+                line += " " + a;
+            return hopper::cli::run_command(rest, line);
+        }
+        if (command == "status") return hopper::cli::status_command(rest);
         if (command.starts_with("-"))
             return error("unknown option '" + command + "' (try 'campaign --help')", exit_usage);
         return error("unknown command '" + command + "' (available: " + available_commands() + ")",

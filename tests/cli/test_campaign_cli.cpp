@@ -206,7 +206,7 @@ TEST(CampaignCli, BadCommandLinesExitTwoNamingTheProblem) {
         {"simulate /nonexistent/sweep.toml" + scene + " --seed 1", {"/nonexistent/sweep.toml"}},
         {"simulate " + t + " --D 500 --theta 60 --seed 1", {"D_cm"}},
         {"frobnicate", {"unknown command 'frobnicate'", "simulate"}},
-        {"run " + t, {"unknown command 'run'"}},
+        {"run", {"missing the sweep file"}},
         {"help frobnicate", {"frobnicate"}},
     };
     for (const auto& c : cases) {

@@ -33,7 +33,9 @@ void expect_consistent(const RealizationResult& r) {
     // Only the last interval may be censored; one uncensored interval per jam.
     int uncensored = 0;
     for (std::size_t k = 0; k < r.censored.size(); ++k) {
-        if (r.censored[k]) EXPECT_EQ(k + 1, r.censored.size());
+        if (r.censored[k]) {
+            EXPECT_EQ(k + 1, r.censored.size());
+        }
         uncensored += !r.censored[k];
         EXPECT_GE(r.survival_times[k], 0.0);
     }

@@ -1,0 +1,73 @@
+#pragma once
+// The master: hands task ids to idle workers (dynamic dispatch, in the order given: longest
+// expected first), stores every result as it arrives (the only writer of the store), retries
+// failed attempts, reacts to stop requests, and prints a progress line at a steady interval.
+//
+// Retry policy: an attempt that raises an exception (no result) is recorded in the store's
+// failure log and handed out once more in the same run (max_attempts = 2 in all); if that fails
+// too the task is left in state "error", shown by status, and retried by the next `campaign run`.
+// A realization that ends with status failed is a result: the engine is deterministic, so the
+// same seed would fail the same way again; it is stored with its reason and not retried.
+
+#include <chrono>
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "hopper/campaign/channel.hpp"
+#include "hopper/campaign/signals.hpp"
+#include "hopper/store/store.hpp"
+
+namespace hopper::campaign {
+
+struct TaskRef {
+    int task_id = 0;  // what travels to the worker
+    std::string label;
+    int realization = 0;
+    std::uint64_t seed = 0;
+};
+
+struct MasterOptions {
+    double progress_interval = 10.0;  // s of wall time between progress lines; 0 = none
+    double grace = 60.0;              // s running tasks may take to finish after a drain request
+    int max_attempts = 2;             // attempts per task and run when attempts raise exceptions
+    std::chrono::milliseconds max_wait{250};  // longest sleep between looks at stop requests
+};
+
+struct MasterReport {
+    int stored = 0;       // results stored by this run (any status)
+    int failed = 0;       // of which with status failed
+    int errors = 0;       // attempts that raised exceptions
+    int gave_up = 0;      // tasks left in error after max_attempts
+    int interrupted = 0;  // running tasks stopped early (they run again on resume)
+    int not_started = 0;  // tasks never handed out because of a stop request
+    bool stopped = false;
+    std::string stop_reason;
+    double wall_seconds = 0.0;
+    double cpu_seconds = 0.0;  // CPU time of the master's thread
+};
+
+// Counts of the sweep's tasks before this run, for the progress line.
+struct Totals {
+    int total = 0;     // tasks of the sweep
+    int finished = 0;  // already stored (done or failed)
+    int failed = 0;    // of which failed, plus tasks in error
+};
+
+class Master {
+  public:
+    Master(MasterChannel& channel, store::Store& store, const StopRequests& stop,
+           MasterOptions options, std::ostream& log);
+    // Runs `todo` to the end or until a stop request ends the run. Does not send quit.
+    MasterReport run(const std::vector<TaskRef>& todo, Totals totals);
+
+  private:
+    MasterChannel& channel_;
+    store::Store& store_;
+    const StopRequests& stop_;
+    MasterOptions options_;
+    std::ostream& log_;
+};
+
+}  // namespace hopper::campaign

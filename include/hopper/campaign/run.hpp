@@ -1,0 +1,51 @@
+#pragma once
+// `campaign run`: runs or resumes the campaign of a sweep file. Under an MPI launcher, rank 0 is
+// the master and every other rank a worker; without one, a single process runs a master and
+// worker threads (one by default). The master opens the store (creating it, or resuming it after
+// checking that the physics agrees), hands out the missing realizations, stores each result as
+// it arrives, and prints the summary table at the end.
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <ostream>
+#include <string>
+
+#include "hopper/campaign/master.hpp"
+#include "hopper/config/sweep.hpp"
+#include "hopper/engine/realization.hpp"
+#include "hopper/store/store.hpp"
+
+namespace hopper::campaign {
+
+// Exit codes of `campaign run` beyond 0 (everything stored) and those of the cli.
+enum RunExit : int {
+    run_ok = 0,
+    run_with_failures = 3,  // finished, but some realizations failed (see the table / status)
+    run_stopped = 4,        // stopped by a signal; run the same command again to resume
+};
+
+struct RunOptions {
+    std::filesystem::path sweep;
+    std::optional<std::filesystem::path> store;  // default: the sweep's [campaign] store
+    MasterOptions master;
+    store::StoreOptions store_options;
+    int threads = 1;  // worker threads in a single-process run (ignored under MPI)
+    std::string code_version = "unknown";
+    std::string command_line;
+    // One realization (default: engine::run_realization(scene, task.seed, hooks)). Benchmarks
+    // and tests replace it.
+    std::function<engine::RealizationResult(const config::Task&, const engine::SceneParams&,
+                                            const engine::RunHooks&)>
+        runner;
+};
+
+// Returns the exit code (RunExit). The summary table goes to `out`, progress and notes to `err`.
+// Throws core::ConfigError (bad sweep file, physics differing from the store's) and
+// core::StoreError (store cannot be used); under MPI only rank 0 throws, other ranks return.
+int run_campaign(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// The compiler that built this code ("gcc 12.2.0"), for provenance.
+std::string compiler_id();
+
+}  // namespace hopper::campaign

@@ -1,0 +1,98 @@
+#pragma once
+// Bytes: a small checked binary codec (little-endian, fixed widths), the checksums the store
+// uses, and the versioned encoding of an engine::RealizationResult. The same bytes travel from
+// a worker to the master and sit in the store's journal, so a result is encoded exactly once.
+//
+// Decoding is checked: a truncated buffer, a count larger than the bytes left, trailing bytes,
+// an unknown version or an out-of-range enum throw core::StoreError naming what was being read.
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hopper/engine/result.hpp"
+
+namespace hopper::store {
+
+using Bytes = std::vector<std::uint8_t>;
+
+class ByteWriter {
+  public:
+    void u8(std::uint8_t v) { out_.push_back(v); }
+    void u32(std::uint32_t v);
+    void u64(std::uint64_t v);
+    void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+    void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+    void f64(double v);  // the IEEE-754 bits, so every value round-trips exactly
+    void str(std::string_view s);
+    void raw(std::span<const std::uint8_t> b) { out_.insert(out_.end(), b.begin(), b.end()); }
+    void f64s(const std::vector<double>& v);
+    void i32s(const std::vector<int>& v);
+    void bools(const std::vector<bool>& v);
+
+    const Bytes& bytes() const { return out_; }
+    Bytes take() { return std::move(out_); }
+    std::size_t size() const { return out_.size(); }
+
+  private:
+    Bytes out_;
+};
+
+class ByteReader {
+  public:
+    // `what` names the data in error messages ("result record of task 3", ...).
+    ByteReader(std::span<const std::uint8_t> in, std::string what);
+
+    std::uint8_t u8();
+    std::uint32_t u32();
+    std::uint64_t u64();
+    std::int32_t i32() { return static_cast<std::int32_t>(u32()); }
+    std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
+    double f64();
+    std::string str();
+    std::span<const std::uint8_t> raw(std::size_t n);
+    std::vector<double> f64s();
+    std::vector<int> i32s();
+    std::vector<bool> bools();
+
+    std::size_t remaining() const { return in_.size() - pos_; }
+    // Throws unless every byte was read.
+    void expect_end() const;
+    [[noreturn]] void fail(const std::string& problem) const;
+
+  private:
+    std::uint32_t count(std::size_t element_size);  // a length prefix, checked against the rest
+    void need(std::size_t n);
+
+    std::span<const std::uint8_t> in_;
+    std::size_t pos_ = 0;
+    std::string what_;
+};
+
+// CRC-32C (Castagnoli, reflected polynomial 0x82F63B78), as used by iSCSI and ext4;
+// crc32c("123456789") == 0xE3069283. `crc` continues a previous checksum.
+std::uint32_t crc32c(std::span<const std::uint8_t> data, std::uint32_t crc = 0);
+
+// FNV-1a 64-bit hash (not cryptographic: it identifies texts that are also compared directly).
+std::uint64_t fnv1a64(std::string_view text, std::uint64_t h = 0xcbf29ce484222325ull);
+std::string hex64(std::uint64_t v);  // 16 lowercase hex digits
+
+// The encoding of a RealizationResult. Version 1 layout: u32 magic "HRR1", u16 version, then
+// every field of RealizationResult in declaration order (Diagnostics last).
+inline constexpr std::uint16_t result_codec_version = 1;
+Bytes encode_result(const engine::RealizationResult& r);
+void encode_result(ByteWriter& w, const engine::RealizationResult& r);
+engine::RealizationResult decode_result(std::span<const std::uint8_t> bytes,
+                                        const std::string& what = "realization result");
+engine::RealizationResult decode_result(ByteReader& r);
+
+// The result with its wall-clock measurements (diagnostics.wall_seconds, ns_per_particle_step,
+// seconds_*) set to zero: two runs of the same realization give equal values, whatever rank or
+// machine ran them.
+engine::RealizationResult without_wall_clock(engine::RealizationResult r);
+// Hash of encode_result(without_wall_clock(r)): equal for bit-identical physics.
+std::uint64_t physics_digest(const engine::RealizationResult& r);
+
+}  // namespace hopper::store

@@ -1,0 +1,112 @@
+#pragma once
+// What the store records: the campaign plan (points, their physics and seeds), one entry per run
+// (provenance), each finished realization, each failed attempt, the end of a run, and the marker
+// that the HDF5 file was closed in step with the journal. Each is one journal record
+// (journal.hpp); the HDF5 file (store.hpp) is built from them.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hopper/store/codec.hpp"
+
+namespace hopper::store {
+
+// One point of a campaign as the store knows it. Identity is the label (its settings); the
+// physics is the canonical text of every scene parameter, so a changed base section is caught
+// even when the label is the same.
+struct PointPlan {
+    std::string label;  // "D_cm=2.7 theta_deg=45 material.mu=0.5"
+    std::string scene;  // canonical "name=value" lines of every scene parameter (SI units)
+    double D_cm = 0.0;
+    double theta_deg = 0.0;
+    int particles = 0;
+    std::vector<std::uint64_t> seeds;  // realization r -> its seed; size = planned realizations
+    std::uint64_t physics_hash() const { return fnv1a64(scene); }
+    int realizations() const { return static_cast<int>(seeds.size()); }
+};
+
+struct CampaignPlan {
+    std::string name;
+    std::uint64_t seed = 0;  // the campaign seed
+    std::vector<PointPlan> points;
+    // Hash of the campaign seed and every point's (label, physics), independent of point order.
+    std::uint64_t physics_hash() const;
+    const PointPlan* find(const std::string& label) const;
+};
+
+// Provenance of one `campaign run` (one allocation, one resume).
+struct RunInfo {
+    std::string start_time;  // ISO 8601 UTC
+    std::string code_version;
+    std::string compiler;
+    std::string command;  // the command line
+    std::string sweep_path;
+    std::string sweep_text;
+    int mpi_size = 1;  // processes (1 without mpirun)
+    int workers = 1;
+    std::vector<std::string> hosts;  // one per process, rank order
+    std::int64_t pid = 0;            // of the master
+};
+
+struct RunStartRecord {
+    RunInfo run;
+    CampaignPlan plan;  // the plan of this run's sweep file
+};
+
+// One finished realization (any status, failed included).
+struct ResultRecord {
+    std::string label;
+    int realization = 0;
+    std::uint64_t seed = 0;
+    int rank = 0;                // the worker: its MPI rank, or its thread number (1..) without MPI
+    int attempt = 1;             // 1 for the first try
+    double task_seconds = 0.0;   // wall-clock time on the worker, scene building included
+    double finished_unix = 0.0;  // when the master stored it, s since 1970 UTC
+    Bytes result;                // encode_result(RealizationResult)
+};
+
+// One attempt that ended in an exception (no result). The task stays pending.
+struct ErrorRecord {
+    std::string label;
+    int realization = 0;
+    std::uint64_t seed = 0;
+    int rank = 0;
+    int attempt = 1;
+    double time_unix = 0.0;
+    std::string reason;
+};
+
+struct RunEndRecord {
+    std::string end_time;  // ISO 8601 UTC
+    std::string reason;    // "complete", "interrupted by SIGTERM", ...
+    int stored = 0;        // realizations stored by this run
+    double wall_seconds = 0.0;
+    double master_cpu_seconds = 0.0;
+};
+
+// Written after the HDF5 file was closed and synced: the file then holds exactly the journal's
+// first `journal_bytes` bytes, and carries `token` as an attribute.
+struct SyncRecord {
+    std::uint64_t token = 0;
+    std::uint64_t journal_bytes = 0;
+    std::uint64_t rows = 0;  // rows in /realizations
+};
+
+Bytes encode(const RunStartRecord& r);
+Bytes encode(const ResultRecord& r);
+Bytes encode(const ErrorRecord& r);
+Bytes encode(const RunEndRecord& r);
+Bytes encode(const SyncRecord& r);
+RunStartRecord decode_run_start(std::span<const std::uint8_t> b);
+ResultRecord decode_result_record(std::span<const std::uint8_t> b);
+ErrorRecord decode_error(std::span<const std::uint8_t> b);
+RunEndRecord decode_run_end(std::span<const std::uint8_t> b);
+SyncRecord decode_sync(std::span<const std::uint8_t> b);
+
+// The current time as ISO 8601 UTC ("2024-05-01T12:00:00Z") and as seconds since 1970.
+std::string utc_now();
+double unix_now();
+
+}  // namespace hopper::store

@@ -1,0 +1,169 @@
+#pragma once
+// The campaign store: one HDF5 file (STORE.h5) and its journal (STORE.h5.journal).
+//
+// The journal (journal.hpp) is the source of truth: every record is fsync'd before the master
+// counts its realization as done. The HDF5 file is a self-describing view of the journal
+// (layout in the README, "Campaigns and the store"), updated as realizations arrive and closed in step with the journal at
+// the end of every run (a sync record names it). At the next open, a file that is not in step
+// -- the writer was killed, the file is damaged or missing -- is rebuilt from the journal into a
+// temporary file and renamed into place, so a kill -9 at any moment loses nothing that was
+// counted as done and never leaves a corrupt store behind once `campaign run` has run again.
+//
+// Only the master writes (Store). Readers use read_status() (the journal, without locks: it works
+// while a run is writing) or read_realizations() (the HDF5 file, for analysis).
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hopper/engine/result.hpp"
+#include "hopper/store/records.hpp"
+
+namespace hopper::store {
+
+// The journal beside a store file: "<store>.journal".
+std::filesystem::path journal_path(const std::filesystem::path& store);
+
+// Where a task stands.
+//   done:    a result whose status is complete, arrested or time_limit
+//   failed:  a result whose status is failed (the engine is deterministic, so running it again
+//            gives the same failure: it is final and shown, not retried)
+//   error:   attempts ended in an exception and no result exists; the next run retries it
+//   pending: nothing yet
+enum class TaskState : std::uint8_t { pending = 0, done = 1, failed = 2, error = 3 };
+std::string to_string(TaskState s);
+
+// What the summary tables need from a stored result.
+struct ResultSummary {
+    engine::Status status = engine::Status::failed;
+    std::string message;
+    int n_jams = 0;
+    int n_intervals = 0;
+    int n_uncensored = 0;
+    double survival_sum = 0.0;  // s, all intervals, censored included
+    std::optional<double> empty_time;
+    int rank = 0;
+    double task_seconds = 0.0;
+};
+
+struct TaskEntry {
+    TaskState state = TaskState::pending;
+    std::int64_t row = -1;  // row in /realizations
+    int errors = 0;         // attempts that ended in an exception
+    std::string last_error;
+    std::optional<ResultSummary> result;
+};
+
+struct PointStatus {
+    std::string label;
+    int planned = 0;
+    int done = 0;
+    int failed = 0;  // failed results plus tasks in error
+    int errors = 0;  // of which in error (retried by the next run)
+    int pending = 0;
+    int extra = 0;  // stored realizations beyond the plan (cannot happen from a journal the
+                    // master wrote; counted rather than dropped)
+    // Over the planned realizations with a result whose status is not failed:
+    int jams = 0;
+    int intervals = 0;          // survival intervals
+    int uncensored = 0;         // of which ended by a jam
+    double survival_sum = 0.0;  // s, all intervals
+    int emptied = 0;            // realizations with an empty time
+    double empty_sum = 0.0;     // s
+};
+
+struct RunSummary {
+    RunInfo info;
+    std::optional<RunEndRecord> end;  // absent: still running, or killed
+    int stored = 0;                   // results recorded by this run
+};
+
+struct Failure {
+    std::string label;
+    int realization = 0;
+    std::uint64_t seed = 0;
+    int rank = 0;
+    int attempt = 0;
+    bool exception = false;  // true: an error record; false: a result with status failed
+    std::string reason;
+};
+
+struct StoreStatus {
+    std::filesystem::path store;
+    bool has_plan = false;
+    std::string campaign_name;
+    std::uint64_t physics_hash = 0;
+    int total = 0, done = 0, failed = 0, errors = 0, pending = 0;
+    std::vector<PointStatus> points;
+    std::vector<RunSummary> runs;
+    std::vector<Failure> failures;  // one per failed task (its latest failure)
+    bool writer_active = false;     // a `campaign run` holds the journal's lock
+    bool hdf5_in_step = false;      // the HDF5 file was closed in step with the journal
+    std::uint64_t journal_bytes = 0;
+    std::uint64_t torn_bytes = 0;  // an incomplete last record (in progress or torn)
+};
+
+// Progress and failures from the journal. Never blocks or disturbs a writer.
+StoreStatus read_status(const std::filesystem::path& store);
+
+// Every stored realization, read back.
+struct StoredRealization {
+    std::string label;
+    int point = 0;        // index in /points
+    ResultRecord record;  // record.result left empty
+    engine::RealizationResult result;
+};
+// From the HDF5 file (rows in the order they were stored).
+std::vector<StoredRealization> read_realizations(const std::filesystem::path& store);
+// From the journal (same order).
+std::vector<StoredRealization> read_journal_realizations(const std::filesystem::path& store);
+
+struct StoreOptions {
+    // Seconds between HDF5 flushes while running (0: after every result). The journal is
+    // always synced per record; this only bounds how stale an interrupted HDF5 file may be.
+    double flush_interval = 1.0;
+    // Test hook (fault injection): raise SIGKILL at a named point the n-th time it is passed:
+    // "journal" (mid-record), "hdf5" (after a partial HDF5 update), "rebuild" (before the
+    // rebuilt file is renamed into place), "close" (HDF5 closed, sync record not yet written).
+    std::string crash_point;
+    int crash_after = 0;
+};
+
+// The master's handle. Opening takes the journal's lock (one writer at a time), scans the
+// journal and drops a torn last record. Nothing is written to the HDF5 file until begin_run().
+class Store {
+  public:
+    explicit Store(const std::filesystem::path& path, StoreOptions options = {});
+    ~Store();
+    Store(const Store&) = delete;
+    Store& operator=(const Store&) = delete;
+
+    const std::filesystem::path& path() const;
+    // The union of every plan recorded so far (empty for a new store).
+    const CampaignPlan& plan() const;
+    bool is_new() const;  // nothing recorded yet
+    // What opening found or did ("dropped an incomplete last journal record of 123 bytes", ...).
+    const std::vector<std::string>& notes() const;
+
+    const TaskEntry* task(const std::string& label, int realization) const;
+    StoreStatus status() const;
+
+    // Records a run and its plan (the caller has checked that the plan's physics agrees with
+    // plan()); extends the store's plan with new points and realizations. Brings the HDF5 file
+    // in step (rebuilding it from the journal when needed) and opens it for writing.
+    void begin_run(const RunStartRecord& run);
+    // Durable (journal fsync) when it returns; the HDF5 file follows within flush_interval.
+    void append(const ResultRecord& r);
+    void append(const ErrorRecord& r);
+    // Records the end of the run, closes the HDF5 file in step with the journal.
+    void end_run(const RunEndRecord& r);
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hopper::store

@@ -1,0 +1,206 @@
+#include "hopper/campaign/master.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <deque>
+#include <map>
+
+#include "hopper/campaign/report.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/store/codec.hpp"
+
+namespace hopper::campaign {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// CPU time of the calling thread (the master's), so that a worker thread in the same process
+// is not counted.
+double thread_cpu_seconds() {
+    rusage u{};
+    getrusage(RUSAGE_THREAD, &u);
+    return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+           1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+struct Item {
+    std::size_t index;  // in todo
+    int attempt;
+};
+
+}  // namespace
+
+Master::Master(MasterChannel& channel, store::Store& store, const StopRequests& stop,
+               MasterOptions options, std::ostream& log)
+    : channel_(channel), store_(store), stop_(stop), options_(options), log_(log) {}
+
+MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
+    const auto start = Clock::now();
+    const double cpu0 = thread_cpu_seconds();
+    MasterReport report;
+    std::deque<Item> queue;
+    for (std::size_t i = 0; i < todo.size(); ++i)
+        queue.push_back({i, 1});
+    std::vector<int> errors(todo.size(), 0);
+    std::deque<int> idle;
+    for (int w = 1; w <= channel_.workers(); ++w)
+        idle.push_back(w);
+    std::map<int, Item> busy;
+
+    bool draining = false, stop_sent = false, stop_announced = false;
+    Clock::time_point drain_deadline{};
+    const bool progress = options_.progress_interval > 0;
+    const auto interval = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(progress ? options_.progress_interval : 1e9));
+    auto next_progress = start + interval;
+    int failed_now = totals.failed;
+
+    auto print_progress = [&] {
+        const double elapsed = seconds_since(start);
+        const double rate = elapsed > 0 ? report.stored / elapsed : 0.0;
+        log_ << progress_line(totals.finished + report.stored, totals.total,
+                              static_cast<int>(busy.size()), failed_now, rate, elapsed)
+             << std::endl;
+    };
+
+    auto record_error = [&](int worker, const Item& item, const std::string& reason) {
+        const TaskRef& t = todo[item.index];
+        store_.append(store::ErrorRecord{t.label, t.realization, t.seed, worker, item.attempt,
+                                         store::unix_now(), reason});
+        ++report.errors;
+        ++errors[item.index];
+        if (errors[item.index] < options_.max_attempts && !draining) {
+            log_ << "campaign: '" << t.label << "' #" << t.realization << " raised an error on "
+                 << "worker " << worker << " (" << reason << "); trying once more" << std::endl;
+            queue.push_front({item.index, item.attempt + 1});
+        } else {
+            ++report.gave_up;
+            ++failed_now;
+            log_ << "campaign: '" << t.label << "' #" << t.realization << " failed "
+                 << errors[item.index] << " time(s) (" << reason << "); left for the next run"
+                 << std::endl;
+        }
+    };
+
+    auto handle = [&](int worker, const Message& m) {
+        const auto it = busy.find(worker);
+        if (it == busy.end() || todo[it->second.index].task_id != m.task) {
+            log_ << "campaign: warning: unexpected message from worker " << worker << " (task "
+                 << m.task << "); ignored" << std::endl;
+            return;
+        }
+        const Item item = it->second;
+        busy.erase(it);
+        idle.push_back(worker);
+        const TaskRef& t = todo[item.index];
+        switch (m.kind) {
+            case MessageKind::result: {
+                engine::Status status;
+                try {
+                    const auto r = store::decode_result(
+                        m.payload, "result from worker " + std::to_string(worker));
+                    if (r.seed != t.seed)
+                        throw core::StoreError("result from worker " + std::to_string(worker) +
+                                               " has seed " + std::to_string(r.seed) +
+                                               ", expected " + std::to_string(t.seed));
+                    status = r.status;
+                } catch (const core::StoreError& e) {
+                    record_error(worker, item, e.what());
+                    return;
+                }
+                store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker,
+                                                  item.attempt, m.seconds, store::unix_now(),
+                                                  m.payload});
+                ++report.stored;
+                if (status == engine::Status::failed) {
+                    ++report.failed;
+                    ++failed_now;
+                }
+                break;
+            }
+            case MessageKind::error:
+                record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
+                break;
+            case MessageKind::interrupted:
+                ++report.interrupted;
+                break;
+            default:
+                log_ << "campaign: warning: worker " << worker << " sent message kind "
+                     << static_cast<int>(m.kind) << "; ignored" << std::endl;
+        }
+    };
+
+    for (;;) {
+        const StopLevel level = stop_.level();
+        if (level != StopLevel::none && !draining) {
+            draining = true;
+            report.stopped = true;
+            report.stop_reason = stop_.reason();
+            drain_deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                std::chrono::duration<double>(options_.grace));
+            log_ << "campaign: " << report.stop_reason << ": handing out no more tasks";
+            if (!busy.empty()) {
+                if (level == StopLevel::now) {
+                    log_ << "; stopping the " << busy.size() << " running realization(s) now";
+                    stop_announced = true;
+                } else
+                    log_ << "; the " << busy.size() << " running realization(s) may finish within "
+                         << format_duration(options_.grace) << " (signal again to stop them now)";
+            }
+            log_ << std::endl;
+        }
+        if (draining && !stop_sent && !busy.empty() &&
+            (stop_.level() == StopLevel::now || Clock::now() >= drain_deadline)) {
+            if (!stop_announced)
+                log_ << "campaign: stopping the " << busy.size() << " running realization(s)"
+                     << std::endl;
+            for (const auto& [w, item] : busy)
+                channel_.send(w, Message::make(MessageKind::stop_now, todo[item.index].task_id));
+            stop_sent = true;
+        }
+        while (!draining && !idle.empty() && !queue.empty()) {
+            const Item item = queue.front();
+            queue.pop_front();
+            const int w = idle.front();
+            idle.pop_front();
+            channel_.send(w,
+                          Message::make(MessageKind::task, todo[item.index].task_id, item.attempt));
+            busy[w] = item;
+        }
+        if (busy.empty() && (queue.empty() || draining)) break;
+
+        auto wait = options_.max_wait;
+        const auto now = Clock::now();
+        auto bound = [&](Clock::time_point t) {
+            if (t > now)
+                wait = std::min(wait, std::chrono::ceil<std::chrono::milliseconds>(t - now));
+            else
+                wait = std::chrono::milliseconds(0);
+        };
+        if (progress) bound(next_progress);
+        if (draining && !stop_sent) bound(drain_deadline);
+        if (auto msg = channel_.receive(wait)) {
+            handle(msg->first, msg->second);
+            // Drain whatever else is already waiting before handing out more.
+            while (auto more = channel_.receive(std::chrono::milliseconds(0)))
+                handle(more->first, more->second);
+        }
+        if (progress && Clock::now() >= next_progress) {
+            print_progress();
+            next_progress += interval;
+        }
+    }
+    report.not_started = static_cast<int>(queue.size());
+    report.wall_seconds = seconds_since(start);
+    report.cpu_seconds = thread_cpu_seconds() - cpu0;
+    if (progress) print_progress();
+    return report;
+}
+
+}  // namespace hopper::campaign

@@ -1,0 +1,202 @@
+#include "hopper/campaign/plan.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "hopper/core/error.hpp"
+#include "hopper/store/codec.hpp"
+
+namespace hopper::campaign {
+
+namespace {
+
+std::string number(double v) {
+    char buf[64];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+
+class Lines {
+  public:
+    void add(const char* name, double v) { text_ += std::string(name) + "=" + number(v) + "\n"; }
+    void add(const char* name, int v) {
+        text_ += std::string(name) + "=" + std::to_string(v) + "\n";
+    }
+    void add(const char* name, const std::string& v) {
+        text_ += std::string(name) + "=" + v + "\n";
+    }
+    void add(const char* name, const std::optional<double>& v) {
+        if (v)
+            add(name, *v);
+        else
+            add(name, std::string("unset"));
+    }
+    std::string take() { return std::move(text_); }
+
+  private:
+    std::string text_;
+};
+
+std::map<std::string, std::string> parse_lines(const std::string& text) {
+    std::map<std::string, std::string> m;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+        const auto eq = line.find('=');
+        if (eq != std::string::npos) m[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+    return m;
+}
+
+}  // namespace
+
+std::string scene_text(const engine::SceneParams& p) {
+    // Keep in step with engine::SceneParams: test_plan checks sizeof(SceneParams) so that a new
+    // field cannot be forgotten here.
+    Lines l;
+    l.add("hopper.width_m", p.hopper.width);
+    l.add("hopper.outlet_m", p.hopper.outlet);
+    l.add("hopper.theta_rad", p.hopper.theta);
+    l.add("hopper.wall_diameter_m", p.hopper.wall_diameter);
+    l.add("hopper.wall_spacing", p.hopper.wall_spacing);
+    l.add("particles.count", p.particles.count);
+    l.add("particles.small_fraction", p.particles.small_fraction);
+    l.add("particles.d_small_m", p.particles.d_small);
+    l.add("particles.d_large_m", p.particles.d_large);
+    l.add("particles.thickness_m", p.particles.thickness);
+    l.add("particles.density_kg_m3", p.particles.density);
+    l.add("material.e_n", p.material.system.e_n);
+    l.add("material.mu", p.material.system.mu);
+    l.add("walls.e_n", p.material.wall.e_n);
+    l.add("walls.mu", p.material.wall.mu);
+    l.add("material.kt_over_kn", p.material.kt_over_kn);
+    l.add("material.youngs_modulus_pa", p.material.youngs_modulus);
+    l.add("material.poisson_ratio", p.material.poisson_ratio);
+    l.add("material.collision_time_s", p.material.collision_time);
+    l.add("integrator.scheme", engine::to_string(p.integrator.scheme));
+    l.add("integrator.steps_per_collision", p.integrator.steps_per_collision);
+    l.add("integrator.skin", p.integrator.skin);
+    const auto& q = p.protocol;
+    l.add("protocol.fill_gap", q.fill_gap);
+    l.add("protocol.fill_speed_m_s", q.fill_speed);
+    l.add("protocol.settle_ke", q.settle_ke);
+    l.add("protocol.settle_hold_s", q.settle_hold);
+    l.add("protocol.settle_max_time_s", q.settle_max_time);
+    l.add("protocol.jam_region_height", q.jam_region_height);
+    l.add("protocol.t_check_s", q.t_check);
+    l.add("protocol.detector_interval_s", q.detector_interval);
+    l.add("protocol.shake_amplitude", q.shake_amplitude);
+    l.add("protocol.shake_period_s", q.shake_period);
+    l.add("protocol.shake_direction_rad", q.shake_direction);
+    l.add("protocol.max_shakes", q.max_shakes);
+    l.add("protocol.max_time_s", q.max_time);
+    l.add("protocol.exit_depth", q.exit_depth);
+    l.add("protocol.empty_threshold", q.empty_threshold);
+    l.add("protocol.sample_interval_s", q.sample_interval);
+    l.add("protocol.max_overlap", q.max_overlap);
+    l.add("gravity_m_s2", p.gravity);
+    return l.take();
+}
+
+store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
+    store::CampaignPlan plan;
+    plan.name = spec.name;
+    plan.seed = spec.seed;
+    for (const auto& pt : spec.points) {
+        store::PointPlan p;
+        p.label = pt.label;
+        p.scene = scene_text(pt.scene);
+        p.D_cm = pt.scene.hopper.outlet / core::cm;
+        p.theta_deg = pt.scene.hopper.theta / core::deg;
+        p.particles = pt.scene.particles.count;
+        for (int r = 0; r < pt.realizations; ++r)
+            p.seeds.push_back(config::derive_seed(spec.seed, pt.settings, r));
+        plan.points.push_back(std::move(p));
+    }
+    return plan;
+}
+
+std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
+                                          const store::CampaignPlan& sweep) {
+    std::vector<std::string> notes;
+    if (stored.points.empty()) return notes;
+    const std::string advice =
+        "\n  Results of different physics must not be mixed in one store: run this sweep with "
+        "another --store path (adding points or realizations to a sweep is fine).";
+    if (stored.seed != sweep.seed)
+        throw core::ConfigError("the sweep file's campaign seed " + std::to_string(sweep.seed) +
+                                " differs from the store's " + std::to_string(stored.seed) +
+                                ": every realization would change." + advice);
+    // Differences per point, grouped so that one changed base value reads as one line.
+    std::map<std::string, std::vector<std::string>> by_diff;  // diff text -> points
+    int changed = 0;
+    int new_points = 0, more_realizations = 0;
+    for (const auto& p : sweep.points) {
+        const store::PointPlan* s = stored.find(p.label);
+        if (!s) {
+            ++new_points;
+            more_realizations += p.realizations();
+            continue;
+        }
+        if (p.scene != s->scene) {
+            ++changed;
+            const auto mine = parse_lines(p.scene);
+            const auto theirs = parse_lines(s->scene);
+            std::string diff;
+            for (const auto& [k, v] : mine) {
+                const auto it = theirs.find(k);
+                const std::string old = it == theirs.end() ? "absent" : it->second;
+                if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
+            }
+            for (const auto& [k, v] : theirs)
+                if (!mine.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+            by_diff[diff].push_back(p.label);
+            continue;
+        }
+        const std::size_t n = std::min(p.seeds.size(), s->seeds.size());
+        for (std::size_t r = 0; r < n; ++r)
+            if (p.seeds[r] != s->seeds[r])
+                throw core::ConfigError(
+                    "point '" + p.label + "' realization " + std::to_string(r) + " has seed " +
+                    std::to_string(p.seeds[r]) + " here but " + std::to_string(s->seeds[r]) +
+                    " in the store (the seed derivation changed between versions?)" + advice);
+        if (p.seeds.size() > s->seeds.size())
+            more_realizations += static_cast<int>(p.seeds.size() - s->seeds.size());
+    }
+    if (changed > 0) {
+        std::string msg = "the sweep file's physics differs from the store's for " +
+                          std::to_string(changed) + " point(s) already in the store:";
+        int shown = 0;
+        for (const auto& [diff, labels] : by_diff) {
+            if (++shown > 5) {
+                msg += "\n  ...";
+                break;
+            }
+            msg += "\n  point '" + labels.front() + "'" +
+                   (labels.size() > 1 ? " and " + std::to_string(labels.size() - 1) + " more"
+                                      : std::string()) +
+                   ":" + diff;
+        }
+        throw core::ConfigError(msg + advice);
+    }
+    if (new_points > 0 || more_realizations > 0)
+        notes.push_back("the sweep extends the campaign: " + std::to_string(new_points) +
+                        " new point(s), " + std::to_string(more_realizations) +
+                        " new realization(s)");
+    return notes;
+}
+
+double expected_cost(const engine::SceneParams& p) {
+    const auto c = engine::derive_constants(p);
+    const double d = p.particles.d_large;
+    // 2-D Beverloo: W ~ sqrt(g) (D - k d)^(3/2) / d^2 particles per second, k ~ 1.5.
+    const double free_width = std::max(p.hopper.outlet - 1.5 * d, 0.25 * d);
+    const double rate = std::sqrt(p.gravity) * std::pow(free_width, 1.5) / (d * d);
+    const double t_empty = p.particles.count / rate;
+    const double t_sim = 0.3 + std::min(p.protocol.max_time, t_empty);
+    return p.particles.count * (t_sim / c.dt);
+}
+
+}  // namespace hopper::campaign

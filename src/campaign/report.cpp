@@ -1,0 +1,65 @@
+#include "hopper/campaign/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace hopper::campaign {
+
+std::string format_duration(double s) {
+    if (!std::isfinite(s) || s < 0) return "?";
+    const long long t = std::llround(s);
+    char buf[32];
+    if (t < 60)
+        std::snprintf(buf, sizeof buf, "%llds", t);
+    else if (t < 3600)
+        std::snprintf(buf, sizeof buf, "%lldm%02llds", t / 60, t % 60);
+    else if (t < 86400)
+        std::snprintf(buf, sizeof buf, "%lldh%02lldm", t / 3600, (t % 3600) / 60);
+    else
+        std::snprintf(buf, sizeof buf, "%lldd%02lldh", t / 86400, (t % 86400) / 3600);
+    return buf;
+}
+
+std::string progress_line(int done, int total, int running, int failed, double rate,
+                          double elapsed) {
+    char buf[256];
+    const int left = std::max(0, total - done);
+    const std::string eta = left == 0 ? "0s" : rate > 0 ? format_duration(left / rate) : "?";
+    std::snprintf(buf, sizeof buf,
+                  "campaign: %d/%d done, %d running, %d failed, %.3g/s, ETA %s, elapsed %s", done,
+                  total, running, failed, rate, eta.c_str(), format_duration(elapsed).c_str());
+    return buf;
+}
+
+void write_summary(std::ostream& out, const store::StoreStatus& status,
+                   const std::vector<std::string>& labels) {
+    std::map<std::string, const store::PointStatus*> by_label;
+    for (const auto& p : status.points)
+        by_label[p.label] = &p;
+    std::size_t width = 5;
+    for (const auto& l : labels)
+        width = std::max(width, l.size());
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "%-*s  %13s  %6s  %6s  %14s  %14s\n", static_cast<int>(width),
+                  "point", "realizations", "failed", "jams", "mean surv. (s)", "mean empty (s)");
+    out << buf;
+    for (const auto& l : labels) {
+        const auto it = by_label.find(l);
+        if (it == by_label.end()) continue;
+        const store::PointStatus& p = *it->second;
+        const std::string stored =
+            std::to_string(p.done + p.failed - p.errors) + "/" + std::to_string(p.planned);
+        char surv[32] = "-", empty[32] = "-";
+        if (p.uncensored > 0)
+            std::snprintf(surv, sizeof surv, "%.4g", p.survival_sum / p.uncensored);
+        if (p.emptied > 0) std::snprintf(empty, sizeof empty, "%.4g", p.empty_sum / p.emptied);
+        std::snprintf(buf, sizeof buf, "%-*s  %13s  %6d  %6d  %14s  %14s\n",
+                      static_cast<int>(width), l.c_str(), stored.c_str(), p.failed, p.jams, surv,
+                      empty);
+        out << buf;
+    }
+}
+
+}  // namespace hopper::campaign

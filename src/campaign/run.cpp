@@ -1,0 +1,268 @@
+#include "hopper/campaign/run.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <numeric>
+#include <thread>
+
+#include "hopper/campaign/inproc_channel.hpp"
+#include "hopper/campaign/mpi.hpp"
+#include "hopper/campaign/plan.hpp"
+#include "hopper/campaign/report.hpp"
+#include "hopper/campaign/signals.hpp"
+#include "hopper/campaign/worker.hpp"
+#include "hopper/core/error.hpp"
+
+namespace hopper::campaign {
+
+namespace fs = std::filesystem;
+
+std::string compiler_id() {
+#if defined(__clang__)
+    return std::string("clang ") + __clang_version__;
+#elif defined(__GNUC__)
+    return std::string("gcc ") + __VERSION__;
+#else
+    return "unknown";
+#endif
+}
+
+namespace {
+
+std::string host_name() {
+    char buf[256] = {};
+    if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+    return buf;
+}
+
+// Sends quit to every worker when the master's part ends, however it ends.
+class QuitWorkers {
+  public:
+    explicit QuitWorkers(MasterChannel& ch) : ch_(ch) {}
+    ~QuitWorkers() {
+        for (int w = 1; w <= ch_.workers(); ++w)
+            try {
+                ch_.send(w, Message::make(MessageKind::quit));
+            } catch (...) {
+            }
+    }
+
+  private:
+    MasterChannel& ch_;
+};
+
+struct Campaign {
+    config::SweepFile sweep;
+    std::vector<config::Task> tasks;
+};
+
+Campaign load(const RunOptions& opt) {
+    Campaign c;
+    c.sweep = config::load_sweep(opt.sweep);
+    if (!c.sweep.has_campaign)
+        throw core::ConfigError(opt.sweep.string() +
+                                ": no [campaign] section: `campaign run` needs one (name, seed, "
+                                "realizations; see campaigns/README.md)");
+    c.tasks = config::expand_tasks(c.sweep.campaign);
+    return c;
+}
+
+TaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
+    return [&opt, &c](int task_id, const engine::RunHooks& hooks) {
+        if (task_id < 0 || task_id >= static_cast<int>(c.tasks.size()))
+            throw std::out_of_range("task id " + std::to_string(task_id) + " is not in the list");
+        const config::Task& t = c.tasks[static_cast<std::size_t>(task_id)];
+        const engine::SceneParams& scene =
+            c.sweep.campaign.points[static_cast<std::size_t>(t.point_index)].scene;
+        if (opt.runner) return opt.runner(t, scene, hooks);
+        return engine::run_realization(scene, t.seed, hooks);
+    };
+}
+
+// The master's whole part: store, plan check, dispatch, summary. Returns the exit code.
+int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
+               std::vector<std::string> hosts, int mpi_size, bool* dispatching, std::ostream& out,
+               std::ostream& err) {
+    const auto& spec = c.sweep.campaign;
+    const fs::path store_path = opt.store ? *opt.store : spec.store;
+    SignalWatcher signals;
+    store::Store st(store_path, opt.store_options);
+    for (const auto& n : st.notes())
+        err << "campaign: note: " << n << '\n';
+
+    const store::CampaignPlan plan = make_plan(spec);
+    const bool resumed = !st.is_new();
+    if (resumed) {
+        for (const auto& n : check_compatible(st.plan(), plan))
+            err << "campaign: note: " << n << '\n';
+        const auto status = st.status();
+        if (!status.runs.empty() && status.runs.back().info.code_version != opt.code_version)
+            err << "campaign: note: the store's last run used code version "
+                << status.runs.back().info.code_version << "; this is " << opt.code_version
+                << " (results are compared per realization only within one version)\n";
+    }
+
+    store::RunStartRecord start;
+    start.run.start_time = store::utc_now();
+    start.run.code_version = opt.code_version;
+    start.run.compiler = compiler_id();
+    start.run.command = opt.command_line;
+    start.run.sweep_path = c.sweep.path.string();
+    start.run.sweep_text = c.sweep.text;
+    start.run.mpi_size = mpi_size;
+    start.run.workers = channel.workers();
+    start.run.hosts = std::move(hosts);
+    start.run.pid = static_cast<std::int64_t>(getpid());
+    start.plan = plan;
+    st.begin_run(start);
+
+    // What to run: the sweep's tasks with no result yet (pending, or left in error), the most
+    // expensive first (ties in task order).
+    std::vector<double> cost(spec.points.size());
+    for (std::size_t p = 0; p < spec.points.size(); ++p)
+        cost[p] = expected_cost(spec.points[p].scene);
+    std::vector<TaskRef> todo;
+    Totals totals;
+    totals.total = static_cast<int>(c.tasks.size());
+    for (const auto& t : c.tasks) {
+        const auto& label = spec.points[static_cast<std::size_t>(t.point_index)].label;
+        const store::TaskEntry* e = st.task(label, t.realization);
+        const store::TaskState s = e ? e->state : store::TaskState::pending;
+        if (s == store::TaskState::done || s == store::TaskState::failed) {
+            ++totals.finished;
+            if (s == store::TaskState::failed) ++totals.failed;
+            continue;
+        }
+        todo.push_back(TaskRef{t.task_id, label, t.realization, t.seed});
+    }
+    std::stable_sort(todo.begin(), todo.end(), [&](const TaskRef& a, const TaskRef& b) {
+        return cost[static_cast<std::size_t>(
+                   c.tasks[static_cast<std::size_t>(a.task_id)].point_index)] >
+               cost[static_cast<std::size_t>(
+                   c.tasks[static_cast<std::size_t>(b.task_id)].point_index)];
+    });
+    err << "campaign: store " << store_path.string() << (resumed ? " (resumed)" : " (new)") << ": "
+        << totals.total << " realizations in the sweep, " << totals.finished << " stored"
+        << (totals.failed ? " (" + std::to_string(totals.failed) + " failed)" : std::string())
+        << ", " << todo.size() << " to run on " << channel.workers() << " worker"
+        << (channel.workers() == 1 ? "" : "s") << std::endl;
+
+    *dispatching = true;
+    Master master(channel, st, signals, opt.master, err);
+    const MasterReport rep = master.run(todo, totals);
+    *dispatching = false;
+
+    const std::string reason =
+        rep.stopped ? "interrupted by " + rep.stop_reason : std::string("complete");
+    st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
+                                   rep.cpu_seconds});
+
+    const store::StoreStatus status = st.status();
+    std::vector<std::string> labels;
+    for (const auto& p : spec.points)
+        labels.push_back(p.label);
+    write_summary(out, status, labels);
+    out.flush();
+
+    int left = 0, failed = 0;
+    for (const auto& t : c.tasks) {
+        const store::TaskEntry* e =
+            st.task(spec.points[static_cast<std::size_t>(t.point_index)].label, t.realization);
+        const store::TaskState s = e ? e->state : store::TaskState::pending;
+        if (s == store::TaskState::pending) ++left;
+        if (s == store::TaskState::failed || s == store::TaskState::error) ++failed;
+    }
+    char share[64];
+    std::snprintf(share, sizeof share, "%.2f%%",
+                  rep.wall_seconds > 0 ? 100.0 * rep.cpu_seconds / rep.wall_seconds : 0.0);
+    err << "campaign: this run stored " << rep.stored << " realization(s) in "
+        << format_duration(rep.wall_seconds) << "; master CPU " << share << " of wall time"
+        << std::endl;
+    const std::string resume = "campaign run " + c.sweep.path.string() +
+                               (opt.store ? " --store " + opt.store->string() : std::string());
+    if (rep.stopped) {
+        err << "campaign: stopped by " << rep.stop_reason << "; " << left + failed
+            << " realization(s) not stored yet (" << rep.interrupted
+            << " interrupted). Resume with:\n  " << resume << std::endl;
+        return run_stopped;
+    }
+    if (failed > 0) {
+        err << "campaign: finished with " << failed
+            << " failed realization(s); see `campaign status " << store_path.string()
+            << "`. Exceptions are retried by running the same command again." << std::endl;
+        return run_with_failures;
+    }
+    err << "campaign: finished: all " << totals.total << " realizations are in "
+        << store_path.string() << std::endl;
+    return run_ok;
+}
+
+}  // namespace
+
+int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
+    if (opt.threads < 1) throw core::ConfigError("--threads must be at least 1");
+    std::optional<MpiSession> mpi;
+    if (launched_by_mpi()) mpi.emplace();
+    const int rank = mpi ? mpi->rank() : 0;
+    const int size = mpi ? mpi->size() : 1;
+
+    if (size > 1) {
+        // Every rank reads the sweep; all must succeed before anyone goes on.
+        Campaign c;
+        std::exception_ptr failure;
+        try {
+            c = load(opt);
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        const bool ok = mpi->all_ok(!failure);
+        if (!ok) {
+            if (rank != 0) return 2;
+            if (failure) std::rethrow_exception(failure);
+            throw core::ConfigError("another rank could not read the sweep file '" +
+                                    opt.sweep.string() + "' (is it on a shared file system?)");
+        }
+        std::vector<std::string> hosts = mpi->hosts();
+        if (rank != 0) {
+            SignalWatcher ignore;  // the master decides; a forwarded signal must not kill us
+            auto ch = mpi->worker_channel();
+            run_worker(*ch, make_runner(opt, c));
+            return 0;
+        }
+        auto ch = mpi->master_channel();
+        bool dispatching = false;
+        QuitWorkers quit(*ch);
+        try {
+            return run_master(opt, c, *ch, std::move(hosts), size, &dispatching, out, err);
+        } catch (const std::exception& e) {
+            if (!dispatching) throw;
+            // Workers may be busy (and blocked sending a large result): end the job. Every
+            // stored realization is safe in the journal.
+            err << "campaign: error: " << e.what() << "\ncampaign: aborting the MPI job"
+                << std::endl;
+            mpi->abort(1);
+        }
+    }
+
+    // One process: the master here, the workers in threads.
+    const Campaign c = load(opt);
+    InProcessChannels channels(opt.threads);
+    const TaskRunner runner = make_runner(opt, c);
+    std::vector<std::thread> threads;
+    for (int i = 0; i < opt.threads; ++i)
+        threads.emplace_back([&, i] { run_worker(channels.worker(i), runner); });
+    struct Join {
+        std::vector<std::thread>& t;
+        ~Join() {
+            for (auto& th : t)
+                th.join();
+        }
+    } join{threads};
+    QuitWorkers quit(channels.master());
+    bool dispatching = false;
+    return run_master(opt, c, channels.master(), {host_name()}, size, &dispatching, out, err);
+}
+
+}  // namespace hopper::campaign

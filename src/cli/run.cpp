@@ -1,0 +1,129 @@
+#include "cli/run.hpp"
+
+#include <boost/program_options.hpp>
+#include <cstdlib>
+#include <iostream>
+
+#include "cli/options.hpp"
+#include "hopper/campaign/run.hpp"
+#include "hopper/core/error.hpp"
+
+#ifndef HOPPER_VERSION
+#define HOPPER_VERSION "unknown"
+#endif
+
+namespace po = boost::program_options;
+
+namespace hopper::cli {
+
+namespace {
+
+po::options_description run_options() {
+    po::options_description d("run options");
+    d.add_options()  //
+        ("store", po::value<std::string>()->value_name("PATH"),
+         "the HDF5 store (default: [campaign] store of the sweep file, relative to it); its "
+         "journal is PATH.journal")  //
+        ("progress-interval", po::value<std::string>()->value_name("S"),
+         "seconds between progress lines on stderr (default 10; 0 = none)")  //
+        ("grace", po::value<std::string>()->value_name("S"),
+         "after SIGUSR1/SIGINT, seconds running realizations may take to finish before they "
+         "are stopped (default 60)")  //
+        ("threads", po::value<std::string>()->value_name("N"),
+         "worker threads when not started by mpirun (default 1)")  //
+        ("flush-interval", po::value<std::string>()->value_name("S"),
+         "seconds between HDF5 flushes while running (default 1; the journal is synced after "
+         "every realization regardless)")  //
+        ("help,h", "show this help");
+    return d;
+}
+
+double non_negative(const char* option, const std::string& text) {
+    const double v = parse_finite(option, text);
+    if (v < 0) throw core::ConfigError(std::string(option) + " must be >= 0, got '" + text + "'");
+    return v;
+}
+
+}  // namespace
+
+void print_run_help(std::ostream& os) {
+    os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
+          "                    [--threads N] [--flush-interval S]\n"
+          "       mpirun -np N campaign run SWEEP.toml ...\n\n"
+          "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
+          "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
+          "other ranks simulate (use one rank more than cores: the master sleeps while waiting).\n"
+          "A store whose physics differs from the sweep file's is refused; more points or\n"
+          "realizations extend it.\n\n"
+          "Signals: SIGUSR1 or SIGINT: no new realizations, running ones may finish within\n"
+          "--grace seconds; SIGTERM or a second signal: stop running ones now. Either way what\n"
+          "finished is stored and the exit code is 4; the same command resumes.\n\n"
+          "exit codes: 0 all stored, 2 bad sweep file or refused store, 1 store or I/O error,\n"
+          "            3 finished with failed realizations, 4 stopped by a signal (resumable)\n\n"
+       << run_options();
+}
+
+int run_command(const std::vector<std::string>& args, const std::string& command_line) {
+    po::options_description all = run_options();
+    all.add_options()("sweep", po::value<std::vector<std::string>>());
+    po::positional_options_description positional;
+    positional.add("sweep", -1);
+    po::variables_map vm;
+    po::store(
+        po::command_line_parser(args)
+            .options(all)
+            .positional(positional)
+            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
+            .run(),
+        vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+        print_run_help(std::cout);
+        return 0;
+    }
+    const auto sweeps =
+        vm.count("sweep") ? vm["sweep"].as<std::vector<std::string>>() : std::vector<std::string>{};
+    if (sweeps.empty()) throw core::ConfigError("missing the sweep file (SWEEP.toml)");
+    if (sweeps.size() > 1)
+        throw core::ConfigError("expected one sweep file, got " + std::to_string(sweeps.size()) +
+                                ": '" + sweeps[0] + "', '" + sweeps[1] + "'" +
+                                (sweeps.size() > 2 ? ", ..." : ""));
+    campaign::RunOptions opt;
+    opt.sweep = sweeps[0];
+    if (vm.count("store")) {
+        const std::string& s = vm["store"].as<std::string>();
+        if (s.empty()) throw core::ConfigError("--store must not be empty");
+        opt.store = s;
+    }
+    if (vm.count("progress-interval"))
+        opt.master.progress_interval =
+            non_negative("--progress-interval", vm["progress-interval"].as<std::string>());
+    if (vm.count("grace"))
+        opt.master.grace = non_negative("--grace", vm["grace"].as<std::string>());
+    if (vm.count("flush-interval"))
+        opt.store_options.flush_interval =
+            non_negative("--flush-interval", vm["flush-interval"].as<std::string>());
+    if (vm.count("threads")) {
+        const std::string& t = vm["threads"].as<std::string>();
+        const std::uint64_t n = parse_seed("--threads", t);
+        if (n < 1 || n > 4096)
+            throw core::ConfigError("--threads must be between 1 and 4096, got '" + t + "'");
+        opt.threads = static_cast<int>(n);
+    }
+    // Test hook (not for users): HOPPER_STORE_CRASH=<point>:<n> makes the store raise SIGKILL
+    // the n-th time it passes <point> (journal, hdf5, rebuild, close); see store.hpp.
+    if (const char* crash = std::getenv("HOPPER_STORE_CRASH")) {
+        const std::string c = crash;
+        const auto colon = c.find(':');
+        if (colon == std::string::npos)
+            throw core::ConfigError("HOPPER_STORE_CRASH must be <point>:<n>, got '" + c + "'");
+        opt.store_options.crash_point = c.substr(0, colon);
+        opt.store_options.crash_after =
+            static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
+    }
+    opt.code_version = HOPPER_VERSION;
+    opt.command_line = command_line;
+    return campaign::run_campaign(opt, std::cout, std::cerr);
+}
+
+}  // namespace hopper::cli

@@ -1,0 +1,189 @@
+#include "cli/status.hpp"
+
+#include <boost/program_options.hpp>
+#include <cstdio>
+#include <iostream>
+
+#include "cli/json_writer.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/store/codec.hpp"
+
+namespace po = boost::program_options;
+
+namespace hopper::cli {
+
+namespace {
+
+po::options_description status_options() {
+    po::options_description d("status options");
+    d.add_options()("json", po::bool_switch(), "one JSON object instead of the text report")  //
+        ("help,h", "show this help");
+    return d;
+}
+
+std::string hosts_text(const std::vector<std::string>& hosts) {
+    // "node1 x4, node2 x4" in rank order of first appearance.
+    std::vector<std::pair<std::string, int>> counts;
+    for (const auto& h : hosts) {
+        auto it = std::find_if(counts.begin(), counts.end(), [&](auto& c) { return c.first == h; });
+        if (it == counts.end())
+            counts.emplace_back(h, 1);
+        else
+            ++it->second;
+    }
+    std::string s;
+    for (const auto& [h, n] : counts)
+        s += (s.empty() ? "" : ", ") + h + (n > 1 ? " x" + std::to_string(n) : "");
+    return s;
+}
+
+}  // namespace
+
+void print_status_help(std::ostream& os) {
+    os << "usage: campaign status STORE.h5 [--json]\n\n"
+          "Progress and failures of a campaign store, from its journal (STORE.h5.journal).\n"
+          "Safe while `campaign run` is writing the store: it never locks or blocks it.\n\n"
+       << status_options();
+}
+
+std::string status_json(const store::StoreStatus& s) {
+    JsonWriter w;
+    w.begin_object();
+    w.field("store", s.store.string());
+    w.field("campaign", s.campaign_name);
+    w.field("physics_hash", store::hex64(s.physics_hash));
+    w.field("active", s.writer_active);
+    w.field("hdf5_in_step", s.hdf5_in_step);
+    w.field("total", s.total);
+    w.field("done", s.done);
+    w.field("failed", s.failed);
+    w.field("errors", s.errors);
+    w.field("pending", s.pending);
+    w.key("points").begin_array();
+    for (const auto& p : s.points) {
+        w.begin_object_inline();
+        w.field("label", p.label);
+        w.field("total", p.planned);
+        w.field("done", p.done);
+        w.field("failed", p.failed);
+        w.field("errors", p.errors);
+        w.field("pending", p.pending);
+        w.end_object();
+    }
+    w.end_array();
+    w.key("failures").begin_array();
+    for (const auto& f : s.failures) {
+        w.begin_object_inline();
+        w.field("label", f.label);
+        w.field("realization", f.realization);
+        w.field("seed", f.seed);
+        w.field("kind", f.exception ? "error" : "failed");
+        w.field("reason", f.reason);
+        w.end_object();
+    }
+    w.end_array();
+    w.key("runs").begin_array();
+    for (const auto& r : s.runs) {
+        w.begin_object_inline();
+        w.field("start_time", r.info.start_time);
+        w.key("end_time");
+        if (r.end)
+            w.value(r.end->end_time);
+        else
+            w.null();
+        w.key("end_reason");
+        if (r.end)
+            w.value(r.end->reason);
+        else
+            w.null();
+        w.field("code_version", r.info.code_version);
+        w.field("mpi_size", r.info.mpi_size);
+        w.field("workers", r.info.workers);
+        w.field_array("hosts", r.info.hosts);
+        w.field("stored", r.stored);
+        w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+    return w.str();
+}
+
+void write_status(std::ostream& out, const store::StoreStatus& s) {
+    out << "store     " << s.store.string() << '\n';
+    out << "campaign  " << (s.campaign_name.empty() ? "(no run yet)" : s.campaign_name)
+        << "  (physics " << store::hex64(s.physics_hash) << ")\n";
+    out << "state     "
+        << (s.writer_active  ? "a `campaign run` is writing the store"
+            : s.hdf5_in_step ? "idle; the HDF5 file is complete"
+            : s.runs.empty() ? "idle; nothing stored yet"
+                             : "idle; the last run did not close the HDF5 file (killed?): the "
+                               "next `campaign run` rebuilds it from the journal")
+        << '\n';
+    out << "progress  " << s.done << "/" << s.total << " done, " << s.failed << " failed";
+    if (s.errors) out << " (" << s.errors << " by exceptions, retried by the next run)";
+    out << ", " << s.pending << " pending\n";
+    if (!s.runs.empty()) {
+        const auto& r = s.runs.back();
+        out << "runs      " << s.runs.size() << "; last started " << r.info.start_time << " on "
+            << r.info.mpi_size << " process(es) (" << hosts_text(r.info.hosts) << "), "
+            << (r.end ? "ended " + r.end->end_time + " (" + r.end->reason + ")"
+                      : std::string(s.writer_active ? "running" : "did not end (killed?)"))
+            << ", stored " << r.stored << '\n';
+    }
+    if (!s.points.empty()) {
+        std::size_t width = 5;
+        for (const auto& p : s.points)
+            width = std::max(width, p.label.size());
+        char buf[512];
+        std::snprintf(buf, sizeof buf, "\n%-*s  %7s  %7s  %7s  %7s\n", static_cast<int>(width),
+                      "point", "total", "done", "failed", "pending");
+        out << buf;
+        for (const auto& p : s.points) {
+            std::snprintf(buf, sizeof buf, "%-*s  %7d  %7d  %7d  %7d\n", static_cast<int>(width),
+                          p.label.c_str(), p.planned, p.done, p.failed, p.pending);
+            out << buf;
+        }
+    }
+    if (!s.failures.empty()) {
+        out << "\nfailures\n";
+        for (const auto& f : s.failures)
+            out << "  '" << f.label << "' #" << f.realization << " (seed " << f.seed << ", "
+                << (f.exception ? "exception, " + std::to_string(f.attempt) + " attempt(s)"
+                                : std::string("status failed"))
+                << "): " << f.reason << '\n';
+    }
+}
+
+int status_command(const std::vector<std::string>& args) {
+    po::options_description all = status_options();
+    all.add_options()("store", po::value<std::vector<std::string>>());
+    po::positional_options_description positional;
+    positional.add("store", -1);
+    po::variables_map vm;
+    po::store(
+        po::command_line_parser(args)
+            .options(all)
+            .positional(positional)
+            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
+            .run(),
+        vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+        print_status_help(std::cout);
+        return 0;
+    }
+    const auto stores =
+        vm.count("store") ? vm["store"].as<std::vector<std::string>>() : std::vector<std::string>{};
+    if (stores.size() != 1)
+        throw core::ConfigError(stores.empty()
+                                    ? "missing the store (STORE.h5)"
+                                    : "expected one store, got " + std::to_string(stores.size()));
+    const store::StoreStatus s = store::read_status(stores[0]);
+    if (vm["json"].as<bool>())
+        std::cout << status_json(s) << '\n';
+    else
+        write_status(std::cout, s);
+    return 0;
+}
+
+}  // namespace hopper::cli

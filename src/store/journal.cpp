@@ -1,0 +1,304 @@
+#include "hopper/store/journal.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "hopper/core/error.hpp"
+
+namespace hopper::store {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char header_magic[14] = {'H', 'O', 'P', 'P', 'E', 'R', '-',
+                                   'J', 'O', 'U', 'R', 'N', 'A', 'L'};
+constexpr std::uint16_t journal_version = 1;
+constexpr std::uint32_t record_magic = 0x43524A48;  // "HJRC" little-endian
+// A single record larger than this is not something we write: treat it as damage.
+constexpr std::uint32_t max_payload = 1u << 30;
+
+[[noreturn]] void fail_errno(const std::string& what, const fs::path& path) {
+    throw core::StoreError(what + " '" + path.string() + "': " + std::strerror(errno));
+}
+
+std::uint32_t get_u32(const std::uint8_t* p) {
+    return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
+           static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
+}
+
+void put_u32(std::uint8_t* p, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i)
+        p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+void read_exact(int fd, std::uint8_t* buf, std::size_t n, std::uint64_t offset,
+                const fs::path& path) {
+    std::size_t done = 0;
+    while (done < n) {
+        const ssize_t r = ::pread(fd, buf + done, n - done, static_cast<off_t>(offset + done));
+        if (r < 0) {
+            if (errno == EINTR) continue;
+            fail_errno("cannot read the journal", path);
+        }
+        if (r == 0) throw core::StoreError("journal '" + path.string() + "' shrank while read");
+        done += static_cast<std::size_t>(r);
+    }
+}
+
+void write_all(int fd, const std::uint8_t* buf, std::size_t n, std::uint64_t offset,
+               const fs::path& path) {
+    std::size_t done = 0;
+    while (done < n) {
+        const ssize_t w = ::pwrite(fd, buf + done, n - done, static_cast<off_t>(offset + done));
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            fail_errno("cannot write the journal", path);
+        }
+        done += static_cast<std::size_t>(w);
+    }
+}
+
+// The record header's checksum: type, length and payload.
+std::uint32_t record_crc(std::uint8_t type, std::uint32_t length,
+                         std::span<const std::uint8_t> payload) {
+    std::uint8_t head[8] = {type, 0, 0, 0};
+    put_u32(head + 4, length);
+    return crc32c(payload, crc32c(std::span<const std::uint8_t>(head, 8)));
+}
+
+// Whether a complete, valid record starts at `at` in `data`.
+bool valid_record_at(std::span<const std::uint8_t> data, std::size_t at) {
+    if (at + record_header_size > data.size()) return false;
+    const std::uint8_t* h = data.data() + at;
+    if (get_u32(h) != record_magic) return false;
+    const std::uint32_t len = get_u32(h + 8);
+    if (len > max_payload || at + record_header_size + len > data.size()) return false;
+    return get_u32(h + 12) == record_crc(h[4], len, data.subspan(at + record_header_size, len));
+}
+
+void sync_directory(const fs::path& file) {
+    const fs::path dir = file.parent_path().empty() ? fs::path(".") : file.parent_path();
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+    if (fd < 0) return;  // best effort: some file systems do not allow it
+    ::fsync(fd);
+    ::close(fd);
+}
+
+JournalScan scan_fd(int fd, const fs::path& path, const RecordVisitor& visit) {
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) fail_errno("cannot stat the journal", path);
+    JournalScan scan;
+    scan.file_bytes = static_cast<std::uint64_t>(st.st_size);
+    const std::string where = "journal '" + path.string() + "'";
+    if (scan.file_bytes < journal_header_size)
+        throw core::StoreError(where + " is too short to be a hopper journal (" +
+                               std::to_string(scan.file_bytes) + " bytes)");
+    std::uint8_t header[journal_header_size];
+    read_exact(fd, header, journal_header_size, 0, path);
+    if (std::memcmp(header, header_magic, sizeof header_magic) != 0)
+        throw core::StoreError(where + " is not a hopper journal (bad header)");
+    const std::uint16_t version = static_cast<std::uint16_t>(header[14] | header[15] << 8);
+    if (version != journal_version)
+        throw core::StoreError(where + " has format version " + std::to_string(version) +
+                               "; this build reads version " + std::to_string(journal_version));
+
+    std::uint64_t pos = journal_header_size;
+    std::vector<std::uint8_t> payload;
+    while (pos < scan.file_bytes) {
+        bool ok = false;
+        std::uint8_t h[record_header_size];
+        std::uint32_t len = 0;
+        if (pos + record_header_size <= scan.file_bytes) {
+            read_exact(fd, h, record_header_size, pos, path);
+            len = get_u32(h + 8);
+            if (get_u32(h) == record_magic && len <= max_payload &&
+                pos + record_header_size + len <= scan.file_bytes) {
+                payload.resize(len);
+                read_exact(fd, payload.data(), len, pos + record_header_size, path);
+                ok = get_u32(h + 12) == record_crc(h[4], len, payload);
+            }
+        }
+        if (!ok) {
+            // A crash tears only the last record. Anything valid after this point means damage.
+            std::vector<std::uint8_t> rest(scan.file_bytes - pos);
+            read_exact(fd, rest.data(), rest.size(), pos, path);
+            for (std::size_t at = 1; at + record_header_size <= rest.size(); ++at)
+                if (valid_record_at(rest, at))
+                    throw core::StoreError(
+                        where + " is damaged: an invalid record at byte " + std::to_string(pos) +
+                        " is followed by valid ones (a crash cannot do that; restore the store "
+                        "from a backup, or move the journal away to start a new store)");
+            break;
+        }
+        const std::uint8_t type = h[4];
+        if (type < 1 || type > 5)
+            throw core::StoreError(where + ": unknown record type " + std::to_string(type) +
+                                   " at byte " + std::to_string(pos) +
+                                   " (written by a newer version?)");
+        visit(static_cast<RecordType>(type), pos, payload);
+        pos += record_header_size + len;
+        scan.valid_bytes = pos;
+        ++scan.records;
+    }
+    if (scan.valid_bytes == 0) scan.valid_bytes = journal_header_size;
+    return scan;
+}
+
+struct flock whole_file_lock(short type) {
+    struct flock fl {};
+    fl.l_type = type;
+    fl.l_whence = SEEK_SET;
+    fl.l_start = 0;
+    fl.l_len = 0;
+    return fl;
+}
+
+}  // namespace
+
+JournalScan scan_journal(const fs::path& path, const RecordVisitor& visit) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) fail_errno("cannot open the journal", path);
+    try {
+        JournalScan s = scan_fd(fd, path, visit);
+        ::close(fd);
+        return s;
+    } catch (...) {
+        ::close(fd);
+        throw;
+    }
+}
+
+bool journal_locked(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    struct flock fl = whole_file_lock(F_WRLCK);
+    const bool locked = ::fcntl(fd, F_OFD_GETLK, &fl) == 0 && fl.l_type != F_UNLCK;
+    ::close(fd);
+    return locked;
+}
+
+Journal::Journal(fs::path path, int fd, std::uint64_t size, bool locked)
+    : path_(std::move(path)), fd_(fd), size_(size), locked_(locked) {}
+
+Journal::Journal(Journal&& o) noexcept
+    : path_(std::move(o.path_)),
+      fd_(std::exchange(o.fd_, -1)),
+      size_(o.size_),
+      locked_(o.locked_),
+      crash_countdown_(o.crash_countdown_) {}
+
+Journal& Journal::operator=(Journal&& o) noexcept {
+    if (this != &o) {
+        if (fd_ >= 0) ::close(fd_);
+        path_ = std::move(o.path_);
+        fd_ = std::exchange(o.fd_, -1);
+        size_ = o.size_;
+        locked_ = o.locked_;
+        crash_countdown_ = o.crash_countdown_;
+    }
+    return *this;
+}
+
+Journal::~Journal() {
+    if (fd_ >= 0) ::close(fd_);  // releases the lock
+}
+
+void Journal::lock_or_throw() {
+    // An open-file-description lock (Linux): it conflicts within one process too, and closing
+    // another descriptor of the file does not release it.
+    struct flock fl = whole_file_lock(F_WRLCK);
+    if (::fcntl(fd_, F_OFD_SETLK, &fl) == 0) {
+        locked_ = true;
+        return;
+    }
+    if (errno == EACCES || errno == EAGAIN) {
+        ::close(fd_);
+        fd_ = -1;
+        throw core::StoreError("the store's journal '" + path_.string() +
+                               "' is in use by another `campaign run`; wait for it to finish "
+                               "or stop it first");
+    }
+    locked_ = false;  // ENOLCK / EINVAL: the file system has no locks; go on unprotected
+}
+
+Journal Journal::create(const fs::path& path) {
+    // Written under a temporary name and linked into place complete, so that a reader never
+    // sees a journal without its header, and two runs cannot both create it.
+    fs::path tmp = path;
+    tmp += ".new";
+    ::unlink(tmp.c_str());
+    const int fd = ::open(tmp.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) fail_errno("cannot create the journal", tmp);
+    Journal j(path, fd, 0, false);
+    j.lock_or_throw();
+    std::uint8_t header[journal_header_size] = {};
+    std::memcpy(header, header_magic, sizeof header_magic);
+    header[14] = static_cast<std::uint8_t>(journal_version & 0xff);
+    header[15] = static_cast<std::uint8_t>(journal_version >> 8);
+    write_all(fd, header, sizeof header, 0, tmp);
+    if (::fsync(fd) != 0) fail_errno("cannot sync the journal", tmp);
+    if (::link(tmp.c_str(), path.c_str()) != 0) {
+        const int err = errno;
+        if (err == EEXIST) {
+            ::unlink(tmp.c_str());
+            errno = err;
+            fail_errno("cannot create the journal", path);
+        }
+        // File systems without hard links: a rename (not exclusive, but still complete).
+        if (::rename(tmp.c_str(), path.c_str()) != 0) fail_errno("cannot create the journal", path);
+    } else {
+        ::unlink(tmp.c_str());
+    }
+    sync_directory(path);
+    j.size_ = journal_header_size;
+    return j;
+}
+
+Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalScan& scan) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd < 0) fail_errno("cannot open the journal", path);
+    Journal j(path, fd, 0, false);
+    j.lock_or_throw();
+    scan = scan_fd(fd, path, visit);
+    if (scan.valid_bytes < scan.file_bytes) {
+        if (::ftruncate(fd, static_cast<off_t>(scan.valid_bytes)) != 0)
+            fail_errno("cannot drop the torn last record of the journal", path);
+        if (::fsync(fd) != 0) fail_errno("cannot sync the journal", path);
+    }
+    j.size_ = scan.valid_bytes;
+    return j;
+}
+
+std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> payload) {
+    if (payload.size() > max_payload)
+        throw core::StoreError("a journal record of " + std::to_string(payload.size()) +
+                               " bytes is too large");
+    std::vector<std::uint8_t> rec(record_header_size + payload.size());
+    put_u32(rec.data(), record_magic);
+    rec[4] = static_cast<std::uint8_t>(type);
+    const auto len = static_cast<std::uint32_t>(payload.size());
+    put_u32(rec.data() + 8, len);
+    put_u32(rec.data() + 12, record_crc(rec[4], len, payload));
+    std::memcpy(rec.data() + record_header_size, payload.data(), payload.size());
+    if (crash_countdown_ == 0) {
+        write_all(fd_, rec.data(), rec.size() / 2, size_, path_);
+        ::fdatasync(fd_);
+        ::raise(SIGKILL);
+    }
+    if (crash_countdown_ > 0) --crash_countdown_;
+    const std::uint64_t at = size_;
+    write_all(fd_, rec.data(), rec.size(), at, path_);
+    if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+    size_ += rec.size();
+    return at;
+}
+
+}  // namespace hopper::store

@@ -1,0 +1,216 @@
+#include "hopper/store/records.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+
+namespace hopper::store {
+
+std::uint64_t CampaignPlan::physics_hash() const {
+    std::vector<std::pair<std::string, std::uint64_t>> parts;
+    for (const auto& p : points)
+        parts.emplace_back(p.label, p.physics_hash());
+    std::sort(parts.begin(), parts.end());
+    std::uint64_t h = fnv1a64("campaign_seed=" + std::to_string(seed) + "\n");
+    for (const auto& [label, hash] : parts)
+        h = fnv1a64(label + "\n" + hex64(hash) + "\n", h);
+    return h;
+}
+
+const PointPlan* CampaignPlan::find(const std::string& label) const {
+    for (const auto& p : points)
+        if (p.label == label) return &p;
+    return nullptr;
+}
+
+namespace {
+
+void put(ByteWriter& w, const CampaignPlan& p) {
+    w.str(p.name);
+    w.u64(p.seed);
+    w.u32(static_cast<std::uint32_t>(p.points.size()));
+    for (const auto& pt : p.points) {
+        w.str(pt.label);
+        w.str(pt.scene);
+        w.f64(pt.D_cm);
+        w.f64(pt.theta_deg);
+        w.i32(pt.particles);
+        w.u32(static_cast<std::uint32_t>(pt.seeds.size()));
+        for (auto s : pt.seeds)
+            w.u64(s);
+    }
+}
+
+CampaignPlan get_plan(ByteReader& r) {
+    CampaignPlan p;
+    p.name = r.str();
+    p.seed = r.u64();
+    const std::uint32_t n = r.u32();
+    if (n > r.remaining()) r.fail("a point count of " + std::to_string(n) + " is impossible");
+    p.points.resize(n);
+    for (auto& pt : p.points) {
+        pt.label = r.str();
+        pt.scene = r.str();
+        pt.D_cm = r.f64();
+        pt.theta_deg = r.f64();
+        pt.particles = r.i32();
+        const std::uint32_t ns = r.u32();
+        if (static_cast<std::uint64_t>(ns) * 8 > r.remaining())
+            r.fail("a realization count of " + std::to_string(ns) + " exceeds the bytes left");
+        pt.seeds.resize(ns);
+        for (auto& s : pt.seeds)
+            s = r.u64();
+    }
+    return p;
+}
+
+}  // namespace
+
+Bytes encode(const RunStartRecord& r) {
+    ByteWriter w;
+    const RunInfo& i = r.run;
+    for (const std::string* s :
+         {&i.start_time, &i.code_version, &i.compiler, &i.command, &i.sweep_path, &i.sweep_text})
+        w.str(*s);
+    w.i32(i.mpi_size);
+    w.i32(i.workers);
+    w.u32(static_cast<std::uint32_t>(i.hosts.size()));
+    for (const auto& h : i.hosts)
+        w.str(h);
+    w.i64(i.pid);
+    put(w, r.plan);
+    return w.take();
+}
+
+RunStartRecord decode_run_start(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal run record");
+    RunStartRecord r;
+    RunInfo& i = r.run;
+    for (std::string* s :
+         {&i.start_time, &i.code_version, &i.compiler, &i.command, &i.sweep_path, &i.sweep_text})
+        *s = in.str();
+    i.mpi_size = in.i32();
+    i.workers = in.i32();
+    const std::uint32_t nh = in.u32();
+    if (nh > in.remaining()) in.fail("a host count of " + std::to_string(nh) + " is impossible");
+    i.hosts.resize(nh);
+    for (auto& h : i.hosts)
+        h = in.str();
+    i.pid = in.i64();
+    r.plan = get_plan(in);
+    in.expect_end();
+    return r;
+}
+
+Bytes encode(const ResultRecord& r) {
+    ByteWriter w;
+    w.str(r.label);
+    w.i32(r.realization);
+    w.u64(r.seed);
+    w.i32(r.rank);
+    w.i32(r.attempt);
+    w.f64(r.task_seconds);
+    w.f64(r.finished_unix);
+    w.u32(static_cast<std::uint32_t>(r.result.size()));
+    w.raw(r.result);
+    return w.take();
+}
+
+ResultRecord decode_result_record(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal result record");
+    ResultRecord r;
+    r.label = in.str();
+    r.realization = in.i32();
+    r.seed = in.u64();
+    r.rank = in.i32();
+    r.attempt = in.i32();
+    r.task_seconds = in.f64();
+    r.finished_unix = in.f64();
+    const std::uint32_t n = in.u32();
+    const auto raw = in.raw(n);
+    r.result.assign(raw.begin(), raw.end());
+    in.expect_end();
+    return r;
+}
+
+Bytes encode(const ErrorRecord& r) {
+    ByteWriter w;
+    w.str(r.label);
+    w.i32(r.realization);
+    w.u64(r.seed);
+    w.i32(r.rank);
+    w.i32(r.attempt);
+    w.f64(r.time_unix);
+    w.str(r.reason);
+    return w.take();
+}
+
+ErrorRecord decode_error(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal error record");
+    ErrorRecord r;
+    r.label = in.str();
+    r.realization = in.i32();
+    r.seed = in.u64();
+    r.rank = in.i32();
+    r.attempt = in.i32();
+    r.time_unix = in.f64();
+    r.reason = in.str();
+    in.expect_end();
+    return r;
+}
+
+Bytes encode(const RunEndRecord& r) {
+    ByteWriter w;
+    w.str(r.end_time);
+    w.str(r.reason);
+    w.i32(r.stored);
+    w.f64(r.wall_seconds);
+    w.f64(r.master_cpu_seconds);
+    return w.take();
+}
+
+RunEndRecord decode_run_end(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal run-end record");
+    RunEndRecord r;
+    r.end_time = in.str();
+    r.reason = in.str();
+    r.stored = in.i32();
+    r.wall_seconds = in.f64();
+    r.master_cpu_seconds = in.f64();
+    in.expect_end();
+    return r;
+}
+
+Bytes encode(const SyncRecord& r) {
+    ByteWriter w;
+    w.u64(r.token);
+    w.u64(r.journal_bytes);
+    w.u64(r.rows);
+    return w.take();
+}
+
+SyncRecord decode_sync(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal sync record");
+    SyncRecord r;
+    r.token = in.u64();
+    r.journal_bytes = in.u64();
+    r.rows = in.u64();
+    in.expect_end();
+    return r;
+}
+
+std::string utc_now() {
+    const std::time_t t = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buf;
+}
+
+double unix_now() {
+    using namespace std::chrono;
+    return duration<double>(system_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace hopper::store

@@ -1,0 +1,215 @@
+#include "state.hpp"
+
+#include "hopper/core/error.hpp"
+
+namespace hopper::store {
+
+std::string to_string(TaskState s) {
+    switch (s) {
+        case TaskState::pending:
+            return "pending";
+        case TaskState::done:
+            return "done";
+        case TaskState::failed:
+            return "failed";
+        case TaskState::error:
+            return "error";
+    }
+    return "?";
+}
+
+ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& rec) {
+    ResultSummary s;
+    s.status = r.status;
+    s.message = r.message;
+    s.n_jams = r.n_jams;
+    s.n_intervals = static_cast<int>(r.survival_times.size());
+    for (std::size_t i = 0; i < r.survival_times.size(); ++i) {
+        s.survival_sum += r.survival_times[i];
+        if (i < r.censored.size() && !r.censored[i]) ++s.n_uncensored;
+    }
+    s.empty_time = r.empty_time;
+    s.rank = rec.rank;
+    s.task_seconds = rec.task_seconds;
+    return s;
+}
+
+int State::find_point(const std::string& label) const {
+    const auto it = point_index.find(label);
+    return it == point_index.end() ? -1 : it->second;
+}
+
+std::uint64_t State::seed_of(int point, int realization) const {
+    const auto& seeds = plan.points[static_cast<std::size_t>(point)].seeds;
+    return realization < static_cast<int>(seeds.size())
+               ? seeds[static_cast<std::size_t>(realization)]
+               : 0;
+}
+
+bool State::apply(const RunStartRecord& r) {
+    bool changed = false;
+    if (plan.points.empty() && runs.empty()) plan.seed = r.plan.seed;
+    plan.name = r.plan.name;
+    for (const auto& p : r.plan.points) {
+        const int i = find_point(p.label);
+        if (i < 0) {
+            point_index[p.label] = static_cast<int>(plan.points.size());
+            plan.points.push_back(p);
+            tasks.emplace_back(p.seeds.size());
+            changed = true;
+            continue;
+        }
+        auto& mine = plan.points[static_cast<std::size_t>(i)];
+        if (p.seeds.size() > mine.seeds.size()) {
+            // Seeds depend only on (campaign seed, label, index): the prefix is the same.
+            mine.seeds = p.seeds;
+            auto& t = tasks[static_cast<std::size_t>(i)];
+            if (t.size() < mine.seeds.size()) t.resize(mine.seeds.size());
+            changed = true;
+        }
+    }
+    runs.push_back(RunSummary{r.run, std::nullopt, 0});
+    return changed;
+}
+
+std::int64_t State::apply(const ResultRecord& r, const engine::RealizationResult& result) {
+    const int p = find_point(r.label);
+    if (p < 0)
+        throw core::StoreError("journal holds a result for point '" + r.label +
+                               "', which no run planned (damaged journal)");
+    if (r.realization < 0)
+        throw core::StoreError("journal holds a result with a negative realization index");
+    auto& t = tasks[static_cast<std::size_t>(p)];
+    if (static_cast<std::size_t>(r.realization) >= t.size())
+        t.resize(static_cast<std::size_t>(r.realization) + 1);
+    TaskEntry& e = t[static_cast<std::size_t>(r.realization)];
+    if (e.result) {
+        ++duplicates;
+        return -1;
+    }
+    e.result = summarize(result, r);
+    e.state = result.status == engine::Status::failed ? TaskState::failed : TaskState::done;
+    e.row = rows++;
+    if (!runs.empty()) ++runs.back().stored;
+    return e.row;
+}
+
+int State::apply(const ErrorRecord& r) {
+    const int p = find_point(r.label);
+    if (p < 0)
+        throw core::StoreError("journal holds an error for point '" + r.label +
+                               "', which no run planned (damaged journal)");
+    auto& t = tasks[static_cast<std::size_t>(p)];
+    if (r.realization < 0)
+        throw core::StoreError("journal holds an error with a negative realization index");
+    if (static_cast<std::size_t>(r.realization) >= t.size())
+        t.resize(static_cast<std::size_t>(r.realization) + 1);
+    TaskEntry& e = t[static_cast<std::size_t>(r.realization)];
+    ++e.errors;
+    e.last_error = r.reason;
+    if (!e.result) e.state = TaskState::error;
+    failures.push_back(Failure{r.label, r.realization, r.seed, r.rank, r.attempt, true, r.reason});
+    return p;
+}
+
+void State::apply(const RunEndRecord& r) {
+    if (!runs.empty()) runs.back().end = r;
+}
+
+StoreStatus State::status() const {
+    StoreStatus s;
+    s.has_plan = !plan.points.empty();
+    s.campaign_name = plan.name;
+    s.physics_hash = s.has_plan ? plan.physics_hash() : 0;
+    s.runs = runs;
+    for (std::size_t p = 0; p < plan.points.size(); ++p) {
+        PointStatus ps;
+        ps.label = plan.points[p].label;
+        ps.planned = plan.points[p].realizations();
+        const auto& t = tasks[p];
+        for (std::size_t r = 0; r < t.size(); ++r) {
+            const TaskEntry& e = t[r];
+            if (static_cast<int>(r) >= ps.planned) {
+                if (e.result) ++ps.extra;
+                continue;
+            }
+            switch (e.state) {
+                case TaskState::done: {
+                    ++ps.done;
+                    const ResultSummary& rs = *e.result;
+                    ps.jams += rs.n_jams;
+                    ps.intervals += rs.n_intervals;
+                    ps.uncensored += rs.n_uncensored;
+                    ps.survival_sum += rs.survival_sum;
+                    if (rs.empty_time) {
+                        ++ps.emptied;
+                        ps.empty_sum += *rs.empty_time;
+                    }
+                    break;
+                }
+                case TaskState::failed:
+                    ++ps.failed;
+                    s.failures.push_back(Failure{ps.label, static_cast<int>(r),
+                                                 seed_of(static_cast<int>(p), static_cast<int>(r)),
+                                                 e.result->rank, 0, false, e.result->message});
+                    break;
+                case TaskState::error:
+                    ++ps.failed;
+                    ++ps.errors;
+                    s.failures.push_back(Failure{ps.label, static_cast<int>(r),
+                                                 seed_of(static_cast<int>(p), static_cast<int>(r)),
+                                                 0, e.errors, true, e.last_error});
+                    break;
+                case TaskState::pending:
+                    break;
+            }
+        }
+        ps.pending = ps.planned - ps.done - ps.failed;
+        s.total += ps.planned;
+        s.done += ps.done;
+        s.failed += ps.failed;
+        s.errors += ps.errors;
+        s.pending += ps.pending;
+        s.points.push_back(ps);
+    }
+    return s;
+}
+
+void apply_record(State& state, RecordType type, std::uint64_t offset,
+                  std::span<const std::uint8_t> payload, ReplaySink* sink) {
+    switch (type) {
+        case RecordType::run_start: {
+            const RunStartRecord r = decode_run_start(payload);
+            const bool changed = state.apply(r);
+            if (sink) sink->run_start(state, r, changed);
+            break;
+        }
+        case RecordType::result: {
+            const ResultRecord r = decode_result_record(payload);
+            const engine::RealizationResult res = decode_result(
+                r.result, "result of '" + r.label + "' #" + std::to_string(r.realization));
+            const std::int64_t row = state.apply(r, res);
+            if (sink && row >= 0) sink->result(state, state.find_point(r.label), row, r, res);
+            break;
+        }
+        case RecordType::error: {
+            const ErrorRecord r = decode_error(payload);
+            const int p = state.apply(r);
+            if (sink) sink->error(state, p, r);
+            break;
+        }
+        case RecordType::run_end: {
+            const RunEndRecord r = decode_run_end(payload);
+            state.apply(r);
+            if (sink) sink->run_end(state, r);
+            break;
+        }
+        case RecordType::sync:
+            state.last_sync = decode_sync(payload);
+            break;
+    }
+    state.last_type = type;
+    state.last_offset = offset;
+}
+
+}  // namespace hopper::store

@@ -1,0 +1,60 @@
+#pragma once
+// The store's state as the journal describes it (private to the store layer): the union plan,
+// where every task stands, the runs and the failures. Built by replaying journal records; the
+// HDF5 layout (layout.hpp) is written from it.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hopper/store/journal.hpp"
+#include "hopper/store/records.hpp"
+#include "hopper/store/store.hpp"
+
+namespace hopper::store {
+
+struct State {
+    CampaignPlan plan;  // union of every run's plan; points in order of first appearance
+    std::map<std::string, int> point_index;
+    std::vector<std::vector<TaskEntry>> tasks;  // [point][realization], at least planned long
+    std::int64_t rows = 0;                      // stored results
+    std::vector<RunSummary> runs;
+    std::vector<Failure> failures;  // every error record, in order
+    int duplicates = 0;             // results for a task that already had one (ignored)
+    // The last record (to decide whether the HDF5 file is in step).
+    std::optional<RecordType> last_type;
+    std::uint64_t last_offset = 0;
+    std::optional<SyncRecord> last_sync;
+
+    // Each returns what changed, for the HDF5 writer.
+    // True when the union plan changed (new points or realizations).
+    bool apply(const RunStartRecord& r);
+    // The row of the new result, or -1 for a duplicate (ignored). Throws for an unknown point.
+    std::int64_t apply(const ResultRecord& r, const engine::RealizationResult& result);
+    // The point index (throws for an unknown point).
+    int apply(const ErrorRecord& r);
+    void apply(const RunEndRecord& r);
+
+    int find_point(const std::string& label) const;
+    std::uint64_t seed_of(int point, int realization) const;
+    StoreStatus status() const;
+};
+
+ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& rec);
+
+// Replays the journal's records into `state`; `on_record` (optional) sees each decoded record
+// after it was applied (for rebuilding the HDF5 file).
+struct ReplaySink {
+    virtual ~ReplaySink() = default;
+    virtual void run_start(const State&, const RunStartRecord&, bool /*plan_changed*/) {}
+    virtual void result(const State&, int /*point*/, std::int64_t /*row*/, const ResultRecord&,
+                        const engine::RealizationResult&) {}
+    virtual void error(const State&, int /*point*/, const ErrorRecord&) {}
+    virtual void run_end(const State&, const RunEndRecord&) {}
+};
+void apply_record(State& state, RecordType type, std::uint64_t offset,
+                  std::span<const std::uint8_t> payload, ReplaySink* sink);
+
+}  // namespace hopper::store

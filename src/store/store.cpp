@@ -1,0 +1,369 @@
+#include "hopper/store/store.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <random>
+
+#include "h5.hpp"
+#include "hopper/core/error.hpp"
+#include "layout.hpp"
+#include "state.hpp"
+
+namespace hopper::store {
+
+namespace fs = std::filesystem;
+
+fs::path journal_path(const fs::path& store) {
+    fs::path j = store;
+    j += ".journal";
+    return j;
+}
+
+namespace {
+
+void fsync_path(const fs::path& p, bool directory = false) {
+    const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | (directory ? O_DIRECTORY : 0));
+    if (fd < 0) return;
+    ::fsync(fd);
+    ::close(fd);
+}
+
+fs::path parent_or_dot(const fs::path& p) {
+    return p.parent_path().empty() ? fs::path(".") : p.parent_path();
+}
+
+// Whether the HDF5 file was closed in step with the journal, judged from the journal alone:
+// the last record is a sync record written right after the file was closed at that length.
+bool journal_says_in_step(const State& s) {
+    return s.last_type == RecordType::sync && s.last_sync &&
+           s.last_sync->journal_bytes == s.last_offset &&
+           s.last_sync->rows == static_cast<std::uint64_t>(s.rows);
+}
+
+// Replays records into a state and an HDF5 writer (rebuild).
+struct RebuildSink : ReplaySink {
+    layout::Writer& w;
+    std::int64_t since_flush = 0;
+    explicit RebuildSink(layout::Writer& writer) : w(writer) {}
+    void run_start(const State& s, const RunStartRecord&, bool changed) override {
+        w.run_start(s, changed);
+    }
+    void result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
+                const engine::RealizationResult& r) override {
+        w.result(s, point, row, rec, r);
+        if (++since_flush >= 2000) {  // bounds the memory of buffered rows
+            w.flush(s);
+            since_flush = 0;
+        }
+    }
+    void error(const State& s, int point, const ErrorRecord& rec) override {
+        w.error(s, point, rec);
+    }
+    void run_end(const State& s, const RunEndRecord&) override { w.run_end(s); }
+};
+
+}  // namespace
+
+struct Store::Impl {
+    fs::path path;
+    fs::path jpath;
+    StoreOptions opt;
+    std::optional<Journal> journal;
+    State state;
+    bool is_new = false;
+    bool h5_in_step = false;
+    std::vector<std::string> notes;
+    std::optional<layout::Writer> writer;
+    std::chrono::steady_clock::time_point last_flush{};
+    bool run_open = false;
+    int crash_passes = 0;
+
+    std::string where() const { return "store '" + path.string() + "'"; }
+
+    // Test hook: SIGKILL the n-th time `point` is passed.
+    void crash_point(const char* point) {
+        if (opt.crash_point == point && ++crash_passes == opt.crash_after) ::raise(SIGKILL);
+    }
+
+    void rebuild() {
+        fs::path tmp = path;
+        tmp += ".rebuild";
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        {
+            layout::Writer w = layout::Writer::create(tmp, jpath.filename().string());
+            State fresh;
+            RebuildSink sink(w);
+            scan_journal(jpath,
+                         [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+                             if (off < journal->size()) apply_record(fresh, t, off, p, &sink);
+                         });
+            w.flush(fresh);
+            w.close(fresh, 0, 0);  // consistent, but not a sync point (token 0)
+        }
+        fsync_path(tmp);
+        crash_point("rebuild");
+        fs::rename(tmp, path);
+        fsync_path(parent_or_dot(path), true);
+    }
+
+    void maybe_flush() {
+        const auto now = std::chrono::steady_clock::now();
+        if (opt.flush_interval <= 0.0 ||
+            std::chrono::duration<double>(now - last_flush).count() >= opt.flush_interval) {
+            if (opt.crash_point == "hdf5" && ++crash_passes == opt.crash_after) {
+                writer->flush(state, true);  // a partial update of the file, then die
+                ::raise(SIGKILL);
+            }
+            writer->flush(state);
+            last_flush = now;
+        }
+    }
+};
+
+Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_unique<Impl>()) {
+    Impl& m = *impl_;
+    m.path = path;
+    m.jpath = journal_path(path);
+    m.opt = std::move(options);
+    h5::quiet_errors();
+    std::error_code ec;
+    const bool have_journal = fs::exists(m.jpath, ec);
+    const bool have_h5 = fs::exists(path, ec);
+    if (!have_journal) {
+        if (have_h5) {
+            const layout::Inspection in = layout::inspect(path);
+            if (in.readable)
+                throw core::StoreError(
+                    m.where() + " has no journal '" + m.jpath.string() +
+                    "': the journal is the record of what finished and must stay beside the "
+                    "store; restore it, or use another --store path (the .h5 file alone can "
+                    "still be read for analysis)");
+            throw core::StoreError(m.where() + " exists and is not a hopper store (" + in.problem +
+                                   "); use another --store path or move the file away");
+        }
+        fs::create_directories(parent_or_dot(path), ec);
+        m.journal.emplace(Journal::create(m.jpath));
+        m.is_new = true;
+    } else {
+        JournalScan scan;
+        m.journal.emplace(Journal::open(
+            m.jpath,
+            [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+                apply_record(m.state, t, off, p, nullptr);
+            },
+            scan));
+        if (scan.torn_bytes() > 0)
+            m.notes.push_back("dropped an incomplete last journal record (" +
+                              std::to_string(scan.torn_bytes()) +
+                              " bytes, from an interrupted write); its realization runs again");
+        if (m.state.duplicates > 0)
+            m.notes.push_back("the journal holds " + std::to_string(m.state.duplicates) +
+                              " duplicate results; the first of each is kept");
+        m.is_new = m.state.runs.empty();
+        if (have_h5) {
+            const layout::Inspection in = layout::inspect(path);
+            if (in.foreign)
+                throw core::StoreError(m.where() + " is not a hopper store (" + in.problem +
+                                       ") although its journal '" + m.jpath.string() +
+                                       "' is; move the file away so that it can be rebuilt from "
+                                       "the journal");
+            m.h5_in_step = in.readable && in.consistent && journal_says_in_step(m.state) &&
+                           in.token == m.state.last_sync->token &&
+                           in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
+            if (!m.h5_in_step && !m.is_new)
+                m.notes.push_back(
+                    in.readable ? "the HDF5 file is not in step with the journal (the last run "
+                                  "did not close it); rebuilding it from the journal"
+                                : "the HDF5 file is damaged (" + in.problem +
+                                      "); rebuilding it from the journal");
+        } else if (!m.is_new) {
+            m.notes.push_back("the HDF5 file is missing; rebuilding it from the journal");
+        }
+    }
+    if (m.opt.crash_point == "journal") m.journal->crash_after_appends(m.opt.crash_after - 1);
+    if (!m.journal->locked())
+        m.notes.push_back(
+            "the file system does not support locks: nothing prevents two runs "
+            "from writing this store at once");
+}
+
+Store::~Store() {
+    // A run that did not end leaves the HDF5 file marked inconsistent; the next open rebuilds it.
+    try {
+        impl_->writer.reset();
+    } catch (...) {
+    }
+}
+
+const fs::path& Store::path() const {
+    return impl_->path;
+}
+const CampaignPlan& Store::plan() const {
+    return impl_->state.plan;
+}
+bool Store::is_new() const {
+    return impl_->is_new;
+}
+const std::vector<std::string>& Store::notes() const {
+    return impl_->notes;
+}
+
+const TaskEntry* Store::task(const std::string& label, int realization) const {
+    const State& s = impl_->state;
+    const int p = s.find_point(label);
+    if (p < 0 || realization < 0) return nullptr;
+    const auto& t = s.tasks[static_cast<std::size_t>(p)];
+    return static_cast<std::size_t>(realization) < t.size()
+               ? &t[static_cast<std::size_t>(realization)]
+               : nullptr;
+}
+
+StoreStatus Store::status() const {
+    StoreStatus s = impl_->state.status();
+    s.store = impl_->path;
+    s.writer_active = true;
+    s.journal_bytes = impl_->journal->size();
+    return s;
+}
+
+void Store::begin_run(const RunStartRecord& run) {
+    Impl& m = *impl_;
+    if (m.run_open) throw core::StoreError("internal: begin_run() twice");
+    m.journal->append(RecordType::run_start, encode(run));
+    const bool changed = m.state.apply(run);
+    m.state.last_type = RecordType::run_start;
+    if (m.h5_in_step) {
+        try {
+            m.writer.emplace(layout::Writer::open(m.path));
+        } catch (const core::StoreError& e) {
+            m.notes.push_back(std::string("cannot open the HDF5 file for writing (") + e.what() +
+                              "); rebuilding it");
+            m.writer.reset();
+        }
+    }
+    if (!m.writer) {
+        m.rebuild();
+        m.writer.emplace(layout::Writer::open(m.path));
+    } else {
+        m.writer->run_start(m.state, changed);
+    }
+    m.h5_in_step = false;
+    m.run_open = true;
+    m.writer->flush(m.state);
+    m.last_flush = std::chrono::steady_clock::now();
+}
+
+void Store::append(const ResultRecord& r) {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: append() outside a run");
+    // Decode first: a record that cannot be read back never enters the journal.
+    const engine::RealizationResult res =
+        decode_result(r.result, "result of '" + r.label + "' #" + std::to_string(r.realization));
+    if (m.state.find_point(r.label) < 0)
+        throw core::StoreError("internal: result for unplanned point '" + r.label + "'");
+    if (res.seed != r.seed)
+        throw core::StoreError("internal: the result of '" + r.label + "' #" +
+                               std::to_string(r.realization) + " has seed " +
+                               std::to_string(res.seed) + ", its task " + std::to_string(r.seed));
+    m.journal->append(RecordType::result, encode(r));
+    const std::int64_t row = m.state.apply(r, res);
+    m.state.last_type = RecordType::result;
+    if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
+    m.maybe_flush();
+}
+
+void Store::append(const ErrorRecord& r) {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: append() outside a run");
+    if (m.state.find_point(r.label) < 0)
+        throw core::StoreError("internal: error for unplanned point '" + r.label + "'");
+    m.journal->append(RecordType::error, encode(r));
+    const int p = m.state.apply(r);
+    m.state.last_type = RecordType::error;
+    m.writer->error(m.state, p, r);
+    m.maybe_flush();
+}
+
+void Store::end_run(const RunEndRecord& r) {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: end_run() outside a run");
+    m.journal->append(RecordType::run_end, encode(r));
+    m.state.apply(r);
+    m.writer->run_end(m.state);
+    std::random_device rd;
+    const std::uint64_t token = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ 1u;
+    const std::uint64_t at = m.journal->size();
+    m.writer->close(m.state, token, at);
+    m.writer.reset();
+    fsync_path(m.path);
+    m.crash_point("close");
+    SyncRecord sync{token, at, static_cast<std::uint64_t>(m.state.rows)};
+    m.journal->append(RecordType::sync, encode(sync));
+    m.state.last_sync = sync;
+    m.state.last_type = RecordType::sync;
+    m.state.last_offset = at;
+    m.run_open = false;
+    m.h5_in_step = true;
+}
+
+StoreStatus read_status(const fs::path& store) {
+    const fs::path jpath = journal_path(store);
+    std::error_code ec;
+    if (!fs::exists(jpath, ec)) {
+        if (!fs::exists(store, ec))
+            throw core::StoreError("no store at '" + store.string() + "' (neither the file nor " +
+                                   "its journal '" + jpath.string() + "' exists)");
+        const layout::Inspection in = layout::inspect(store);
+        throw core::StoreError(
+            in.readable ? "store '" + store.string() + "' has no journal '" + jpath.string() +
+                              "'; its progress is in the file's /tasks table (h5dump -g /tasks)"
+                        : "'" + store.string() + "' is not a hopper store (" + in.problem + ")");
+    }
+    State state;
+    const JournalScan scan =
+        scan_journal(jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+            apply_record(state, t, off, p, nullptr);
+        });
+    StoreStatus s = state.status();
+    s.store = store;
+    s.writer_active = journal_locked(jpath);
+    s.hdf5_in_step = !s.writer_active && journal_says_in_step(state) && fs::exists(store, ec);
+    s.journal_bytes = scan.valid_bytes;
+    s.torn_bytes = scan.torn_bytes();
+    return s;
+}
+
+std::vector<StoredRealization> read_realizations(const fs::path& store) {
+    h5::quiet_errors();
+    return layout::read_realizations(store);
+}
+
+std::vector<StoredRealization> read_journal_realizations(const fs::path& store) {
+    State state;
+    std::vector<StoredRealization> out;
+    struct Sink : ReplaySink {
+        std::vector<StoredRealization>& out;
+        explicit Sink(std::vector<StoredRealization>& o) : out(o) {}
+        void result(const State&, int point, std::int64_t, const ResultRecord& rec,
+                    const engine::RealizationResult& r) override {
+            StoredRealization s;
+            s.label = rec.label;
+            s.point = point;
+            s.record = rec;
+            s.record.result.clear();
+            s.result = r;
+            out.push_back(std::move(s));
+        }
+    } sink(out);
+    scan_journal(journal_path(store),
+                 [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+                     apply_record(state, t, off, p, &sink);
+                 });
+    return out;
+}
+
+}  // namespace hopper::store

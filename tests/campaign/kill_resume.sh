@@ -1,0 +1,70 @@
+#!/bin/bash
+# Kill and resume: the whole job is SIGKILLed at random moments (and, in one process, also at
+# chosen dangerous moments inside the store: mid journal record, mid HDF5 update, between the
+# HDF5 close and its sync record, before a rebuilt file is renamed into place). Then the same
+# command resumes it. The end result must equal an uninterrupted run: every realization present
+# exactly once, byte-identical physics. Usage: kill_resume.sh NP (0 = without mpirun).
+NP=$1
+source "$(dirname "$0")/lib.sh"
+reference
+STORE=$WORK/killed.h5
+if [ "$NP" -eq 0 ]; then
+    CMD=("$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --flush-interval 0)
+else
+    CMD=(mpirun -np "$NP" "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --flush-interval 0)
+fi
+RANDOM=$((NP * 7919 + $(date +%s) % 1000))
+echo "random seed of this run: $RANDOM" >&2
+# crash POINT: one run with a crash injected at a chosen moment of the store's writes.
+crash() {
+    HOPPER_STORE_CRASH=$1 "${CMD[@]}" >crash.out 2>crash.err
+    local rc=$?
+    [ $rc -eq 137 ] || { cat crash.err >&2; fail "crash point $1: exit $rc, expected death by SIGKILL"; }
+    echo "crash $1: $("$EXE" status "$STORE" | grep progress)" >&2
+}
+if [ "$NP" -eq 0 ]; then
+    # Mid second journal record (the first result), after a partial HDF5 update, before a
+    # rebuilt file is renamed into place, mid the run's first record.
+    for point in journal:2 hdf5:1 rebuild:1 journal:1; do crash $point; done
+fi
+kills=0
+for i in 1 2 3 4 5; do
+    start_job "${CMD[@]}"
+    random_sleep $((NP == 0 ? 150 : 400)) $((NP == 0 ? 700 : 1800))
+    kill_job KILL
+    kills=$((kills + 1))
+    "$EXE" status "$STORE" >status.$i.txt 2>&1 || fail "status failed on a killed store"
+    echo "kill $i: $(grep progress status.$i.txt)" >&2
+done
+if [ "$NP" -gt 0 ]; then
+    # One rank alone: a worker, then the master (mpirun then ends the rest of the job).
+    for rank in $((NP - 1)) 0; do
+        start_job "${CMD[@]}"
+        random_sleep 600 1200
+        for p in $(pgrep -s "$JOB" -x campaign); do
+            grep -qz "^OMPI_COMM_WORLD_RANK=$rank\$" /proc/$p/environ 2>/dev/null && kill -KILL $p
+        done
+        wait "$JOB" 2>/dev/null
+        for i in $(seq 1 100); do  # mpirun ends the other ranks within a few seconds
+            [ -z "$(pgrep -s "$JOB")" ] && break
+            sleep 0.1
+        done
+        [ -z "$(pgrep -s "$JOB")" ] || { kill_job KILL; fail "the job outlived the kill of rank $rank"; }
+        echo "kill of rank $rank: $("$EXE" status "$STORE" | grep progress)" >&2
+    done
+fi
+# The last crash: everything stored, the HDF5 file closed, its sync record not yet written.
+[ "$NP" -eq 0 ] && crash close:1
+run_expect 0 final "${CMD[@]}"
+expect_in final.err "finished: all 12 realizations"
+digest "$STORE" killed.digest
+same_digests "$WORK/ref.digest" killed.digest
+"$EXE" status "$STORE" --json >status.json || fail "status failed"
+"$PY" - status.json <<'PY' || fail "status after resume"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert (s["total"], s["done"], s["failed"], s["pending"]) == (12, 12, 0, 0), s
+assert s["hdf5_in_step"] and not s["active"], s
+assert len(s["runs"]) >= 2, s
+PY
+echo "ok: $kills kills, resumed to a store identical to the uninterrupted run"

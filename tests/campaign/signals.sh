@@ -1,0 +1,55 @@
+#!/bin/bash
+# Signals: SIGTERM mid-run stops at once, stores what finished, says how to resume and exits 4;
+# SIGUSR1 drains; the rerun completes to the same results as an uninterrupted run.
+# Usage: signals.sh NP (0 = without mpirun; under mpirun SIGUSR1 goes to mpirun, which forwards
+# it to every rank, and SIGTERM to every rank directly).
+NP=$1
+source "$(dirname "$0")/lib.sh"
+reference
+STORE=$WORK/sig.h5
+if [ "$NP" -eq 0 ]; then
+    CMD=("$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30)
+else
+    CMD=(mpirun -np "$NP" "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30)
+fi
+
+# 1. SIGTERM: stop now, once the run is under way.
+start_job "${CMD[@]}"
+wait_stored "$STORE" 1
+if [ "$NP" -eq 0 ]; then
+    kill -TERM "$JOB"
+else
+    kill -TERM $(pgrep -s "$JOB" -x campaign)  # every rank, as Slurm does at the time limit
+fi
+wait "$JOB"
+rc=$?
+[ $rc -eq 4 ] || { cat job.err >&2; fail "SIGTERM: exit $rc, expected 4"; }
+expect_in job.err "SIGTERM: handing out no more tasks"
+expect_in job.err "stopped by SIGTERM"
+expect_in job.err "Resume with:"
+"$EXE" status "$STORE" --json >term.json || fail "status after SIGTERM"
+"$PY" - term.json <<'PY' || fail "store after SIGTERM"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["hdf5_in_step"] and not s["active"], s          # closed cleanly
+assert s["runs"][-1]["end_reason"] == "interrupted by SIGTERM", s["runs"]
+assert 0 < s["done"] < 12 and s["failed"] == 0, s
+PY
+
+# 2. SIGUSR1: drain (running realizations finish within the grace time).
+: >job.err
+start_job "${CMD[@]}"
+before=$("$EXE" status "$STORE" --json | "$PY" -c 'import json,sys; print(json.load(sys.stdin)["done"])')
+wait_stored "$STORE" $((before + 1))
+if [ "$NP" -eq 0 ]; then kill -USR1 "$JOB"; else kill -USR1 $(pgrep -s "$JOB" -x mpirun); fi
+wait "$JOB"
+rc=$?
+[ $rc -eq 4 ] || { cat job.err >&2; fail "SIGUSR1: exit $rc, expected 4"; }
+expect_in job.err "SIGUSR1: handing out no more tasks"
+grep -qF "(0 interrupted)" job.err || { cat job.err >&2; fail "drain interrupted a running realization"; }
+
+# 3. The rerun completes; results equal the uninterrupted run.
+run_expect 0 rerun "${CMD[@]}"
+digest "$STORE" sig.digest
+same_digests "$WORK/ref.digest" sig.digest
+echo "ok"

@@ -1,0 +1,385 @@
+// The master/worker logic without mpirun: in-process channels, worker threads running
+// run_worker() with fake task runners. Dispatch order, load balance, every task stored once,
+// the retry policy, drain and stop requests, a worker told to quit mid-task, and a master that
+// sleeps (not spins) while it waits.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "hopper/campaign/inproc_channel.hpp"
+#include "hopper/campaign/master.hpp"
+#include "hopper/campaign/worker.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/store/store.hpp"
+
+namespace hopper::campaign {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+fs::path scratch() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path dir = fs::path(HOPPER_BINARY_DIR) / "tests" / "campaign" / "tmp" /
+                         (std::string(info->test_suite_name()) + "." + info->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+engine::RealizationResult fake_result(std::uint64_t seed, engine::Status status) {
+    engine::RealizationResult r;
+    r.status = status;
+    r.seed = seed;
+    r.particles = 10;
+    r.survival_times = {0.5, 0.25};
+    r.censored = {false, true};
+    r.jam_onsets = {0.5};
+    r.shakes_per_jam = {1};
+    r.n_jams = 1;
+    r.empty_time = 0.75;
+    r.message = status == engine::Status::failed ? "overlap guard" : "";
+    return r;
+}
+
+// Sleeps `d` in small steps, calling the progress hook like the engine does; returns false
+// (and an "interrupted" result) when the stop flag is raised.
+bool cooperative_sleep(std::chrono::milliseconds d, const engine::RunHooks& hooks) {
+    const auto end = std::chrono::steady_clock::now() + d;
+    while (std::chrono::steady_clock::now() < end) {
+        std::this_thread::sleep_for(2ms);
+        if (hooks.on_progress) hooks.on_progress({engine::Phase::discharge, 0, 0, 0, 0});
+        if (hooks.stop && hooks.stop->load()) return false;
+    }
+    return true;
+}
+
+// A campaign of `n` tasks over two points, a store, workers, and a master.
+class Harness {
+  public:
+    using Behaviour =
+        std::function<engine::RealizationResult(const TaskRef&, int call, const engine::RunHooks&)>;
+
+    Harness(int tasks, int workers, Behaviour behaviour, MasterOptions opt = fast_options())
+        : store_(scratch() / "s.h5"), channels_(workers), behaviour_(std::move(behaviour)) {
+        store::PointPlan a, b;
+        a.label = "D_cm=2 theta_deg=60";
+        b.label = "D_cm=3 theta_deg=60";
+        a.scene = "a\n";
+        b.scene = "b\n";
+        for (int i = 0; i < tasks; ++i) {
+            auto& p = i % 2 == 0 ? a : b;
+            p.seeds.push_back(1000 + static_cast<std::uint64_t>(i));
+            todo_.push_back(
+                TaskRef{i, p.label, p.realizations() - 1, 1000 + static_cast<std::uint64_t>(i)});
+        }
+        store::RunStartRecord run;
+        run.plan.name = "t";
+        run.plan.seed = 1;
+        run.plan.points = {a, b};
+        store_.begin_run(run);
+        options_ = opt;
+        for (int w = 0; w < workers; ++w)
+            threads_.emplace_back([this, w] {
+                run_worker(channels_.worker(w), [this, w](int task, const engine::RunHooks& h) {
+                    int call;
+                    {
+                        std::lock_guard lock(mutex_);
+                        call = ++calls_[task];
+                        order_.push_back(task);
+                        ran_on_[task].push_back(w + 1);
+                    }
+                    return behaviour_(todo_.at(static_cast<std::size_t>(task)), call, h);
+                });
+            });
+    }
+    ~Harness() {
+        for (int w = 1; w <= channels_.workers(); ++w)
+            channels_.master().send(w, Message::make(MessageKind::quit));
+        for (auto& t : threads_)
+            t.join();
+    }
+
+    static MasterOptions fast_options() {
+        MasterOptions o;
+        o.progress_interval = 0;
+        o.max_wait = 20ms;
+        return o;
+    }
+
+    MasterReport run() {
+        Master m(channels_.master(), store_, stop, options_, log);
+        return m.run(todo_, Totals{static_cast<int>(todo_.size()), 0, 0});
+    }
+
+    const store::TaskEntry* entry(int task) const {
+        const auto& t = todo_.at(static_cast<std::size_t>(task));
+        return store_.task(t.label, t.realization);
+    }
+    std::vector<int> order() {
+        std::lock_guard lock(mutex_);
+        return order_;
+    }
+    int calls(int task) {
+        std::lock_guard lock(mutex_);
+        return calls_[task];
+    }
+    std::vector<int> ran_on(int task) {
+        std::lock_guard lock(mutex_);
+        return ran_on_[task];
+    }
+    store::Store& store() { return store_; }
+
+    ManualStop stop;
+    std::ostringstream log;
+
+  private:
+    store::Store store_;
+    InProcessChannels channels_;
+    Behaviour behaviour_;
+    MasterOptions options_;
+    std::vector<TaskRef> todo_;
+    std::vector<std::thread> threads_;
+    std::mutex mutex_;
+    std::map<int, int> calls_;
+    std::map<int, std::vector<int>> ran_on_;
+    std::vector<int> order_;
+};
+
+engine::RealizationResult ok(const TaskRef& t) {
+    return fake_result(t.seed, engine::Status::complete);
+}
+
+TEST(Channel, MessagesRoundTripAndAreChecked) {
+    Message m = Message::make(MessageKind::result, 42, 2);
+    m.seconds = 1.25;
+    m.payload = {1, 2, 3};
+    const store::Bytes b = encode(m);
+    const Message back = decode_message(b);
+    EXPECT_EQ(back.kind, MessageKind::result);
+    EXPECT_EQ(back.task, 42);
+    EXPECT_EQ(back.attempt, 2);
+    EXPECT_EQ(back.seconds, 1.25);
+    EXPECT_EQ(back.payload, m.payload);
+    for (std::size_t n = 0; n < b.size(); ++n)
+        EXPECT_THROW(decode_message(std::span(b.data(), n)), core::StoreError);
+    store::Bytes bad = b;
+    bad[4] = 99;  // kind
+    EXPECT_THROW(decode_message(bad), core::StoreError);
+}
+
+TEST(Master, EveryTaskIsStoredExactlyOnce) {
+    Harness h(24, 3, [](const TaskRef& t, int, const engine::RunHooks& hooks) {
+        cooperative_sleep(std::chrono::milliseconds(1 + t.task_id % 5), hooks);
+        return ok(t);
+    });
+    const MasterReport r = h.run();
+    EXPECT_EQ(r.stored, 24);
+    EXPECT_FALSE(r.stopped);
+    for (int i = 0; i < 24; ++i) {
+        EXPECT_EQ(h.calls(i), 1) << "task " << i;
+        ASSERT_NE(h.entry(i), nullptr);
+        EXPECT_EQ(h.entry(i)->state, store::TaskState::done);
+    }
+    const auto st = h.store().status();
+    EXPECT_EQ(st.done, 24);
+    EXPECT_EQ(st.pending, 0);
+}
+
+TEST(Master, HandsOutTasksInTheGivenOrder) {
+    Harness h(8, 1, [](const TaskRef& t, int, const engine::RunHooks&) { return ok(t); });
+    h.run();
+    EXPECT_EQ(h.order(), (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}));
+}
+
+TEST(Master, DispatchIsDynamic) {
+    // Task 0 is slow; while it runs, the other worker takes every other task.
+    Harness h(11, 2, [](const TaskRef& t, int, const engine::RunHooks& hooks) {
+        cooperative_sleep(t.task_id == 0 ? 300ms : 5ms, hooks);
+        return ok(t);
+    });
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(h.run().stored, 11);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);  // generous: a busy machine
+    const int slow_worker = h.ran_on(0).at(0);
+    for (int i = 1; i < 11; ++i)
+        EXPECT_NE(h.ran_on(i).at(0), slow_worker) << "task " << i;
+}
+
+TEST(Master, AnExceptionIsRetriedOnceThenLeftForTheNextRun) {
+    Harness h(4, 2, [](const TaskRef& t, int call, const engine::RunHooks&) {
+        if (t.task_id == 1 && call == 1) throw std::runtime_error("transient trouble");
+        if (t.task_id == 2) throw std::runtime_error("persistent trouble");
+        return ok(t);
+    });
+    const MasterReport r = h.run();
+    EXPECT_EQ(r.stored, 3);
+    EXPECT_EQ(r.errors, 3);
+    EXPECT_EQ(r.gave_up, 1);
+    EXPECT_EQ(h.calls(1), 2);
+    EXPECT_EQ(h.calls(2), 2);
+    EXPECT_EQ(h.entry(1)->state, store::TaskState::done);
+    EXPECT_EQ(h.entry(1)->errors, 1);
+    EXPECT_EQ(h.entry(2)->state, store::TaskState::error);
+    EXPECT_EQ(h.entry(2)->errors, 2);
+    EXPECT_EQ(h.entry(2)->last_error, "persistent trouble");
+    const auto st = h.store().status();
+    EXPECT_EQ(st.failed, 1);
+    EXPECT_EQ(st.errors, 1);
+    ASSERT_EQ(st.failures.size(), 1u);
+    EXPECT_EQ(st.failures[0].reason, "persistent trouble");
+    EXPECT_NE(h.log.str().find("trying once more"), std::string::npos);
+    EXPECT_NE(h.log.str().find("left for the next run"), std::string::npos);
+}
+
+TEST(Master, AFailedRealizationIsStoredAndNotRetried) {
+    Harness h(3, 1, [](const TaskRef& t, int, const engine::RunHooks&) {
+        return fake_result(t.seed,
+                           t.task_id == 1 ? engine::Status::failed : engine::Status::complete);
+    });
+    const MasterReport r = h.run();
+    EXPECT_EQ(r.stored, 3);
+    EXPECT_EQ(r.failed, 1);
+    EXPECT_EQ(h.calls(1), 1);
+    EXPECT_EQ(h.entry(1)->state, store::TaskState::failed);
+    EXPECT_EQ(h.entry(1)->result->message, "overlap guard");
+}
+
+TEST(Master, AResultWithTheWrongSeedIsAnError) {
+    Harness h(2, 1, [](const TaskRef& t, int, const engine::RunHooks&) {
+        return fake_result(t.task_id == 0 ? t.seed + 1 : t.seed, engine::Status::complete);
+    });
+    const MasterReport r = h.run();
+    EXPECT_EQ(r.stored, 1);
+    EXPECT_EQ(h.entry(0)->state, store::TaskState::error);
+    EXPECT_NE(h.entry(0)->last_error.find("has seed 1001, expected 1000"), std::string::npos);
+}
+
+TEST(Master, DrainLetsRunningTasksFinishAndStartsNoNewOnes) {
+    MasterOptions opt = Harness::fast_options();
+    opt.grace = 30;
+    Harness* self = nullptr;
+    Harness h(
+        10, 2,
+        [&self](const TaskRef& t, int, const engine::RunHooks& hooks) {
+            if (t.task_id == 0) self->stop.request(StopLevel::drain, "SIGUSR1");
+            if (!cooperative_sleep(100ms, hooks))
+                return fake_result(t.seed, engine::Status::failed);
+            return ok(t);
+        },
+        opt);
+    self = &h;
+    const MasterReport r = h.run();
+    EXPECT_TRUE(r.stopped);
+    EXPECT_EQ(r.stop_reason, "SIGUSR1");
+    EXPECT_EQ(r.stored, 2);  // the two running when the request came
+    EXPECT_EQ(r.interrupted, 0);
+    EXPECT_EQ(r.not_started, 8);
+    EXPECT_NE(h.log.str().find("may finish within 30s"), std::string::npos) << h.log.str();
+}
+
+TEST(Master, DrainStopsRunningTasksWhenTheGraceTimeEnds) {
+    MasterOptions opt = Harness::fast_options();
+    opt.grace = 0.1;
+    Harness* self = nullptr;
+    Harness h(
+        4, 2,
+        [&self](const TaskRef& t, int, const engine::RunHooks& hooks) {
+            self->stop.request(StopLevel::drain, "SIGINT");
+            if (!cooperative_sleep(10s, hooks)) {
+                auto r = fake_result(t.seed, engine::Status::failed);
+                r.message = "interrupted (stop requested)";
+                return r;
+            }
+            return ok(t);
+        },
+        opt);
+    self = &h;
+    const auto t0 = std::chrono::steady_clock::now();
+    const MasterReport r = h.run();
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);
+    EXPECT_EQ(r.stored, 0);
+    EXPECT_EQ(r.interrupted, 2);
+    EXPECT_EQ(h.store().status().pending, 4);  // interrupted tasks run again on resume
+}
+
+TEST(Master, StopNowInterruptsAtOnce) {
+    Harness* self = nullptr;
+    Harness h(3, 1, [&self](const TaskRef& t, int, const engine::RunHooks& hooks) {
+        self->stop.request(StopLevel::now, "SIGTERM");
+        if (!cooperative_sleep(10s, hooks)) return fake_result(t.seed, engine::Status::failed);
+        return ok(t);
+    });
+    self = &h;
+    const auto t0 = std::chrono::steady_clock::now();
+    const MasterReport r = h.run();
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+    EXPECT_EQ(r.interrupted, 1);
+    EXPECT_EQ(r.not_started, 2);
+    EXPECT_NE(h.log.str().find("SIGTERM: handing out no more tasks; stopping the 1 running"),
+              std::string::npos)
+        << h.log.str();
+}
+
+TEST(Master, SleepsWhileWaiting) {
+    // One slow task: the master waits 0.8 s for it and must not spin.
+    MasterOptions opt = Harness::fast_options();
+    opt.max_wait = 250ms;
+    opt.progress_interval = 0.2;
+    Harness h(
+        1, 1,
+        [](const TaskRef& t, int, const engine::RunHooks&) {
+            std::this_thread::sleep_for(800ms);
+            return ok(t);
+        },
+        opt);
+    const MasterReport r = h.run();
+    EXPECT_EQ(r.stored, 1);
+    EXPECT_GT(r.wall_seconds, 0.75);
+    EXPECT_LT(r.cpu_seconds / r.wall_seconds, 0.05) << r.cpu_seconds << " s of CPU";
+    EXPECT_NE(h.log.str().find("campaign: 0/1 done, 1 running, 0 failed"), std::string::npos)
+        << h.log.str();
+}
+
+TEST(Worker, QuitDuringATaskStopsItAndSendsNothing) {
+    InProcessChannels ch(1);
+    std::atomic<bool> started{false}, saw_stop{false};
+    std::thread worker([&] {
+        run_worker(ch.worker(0), [&](int, const engine::RunHooks& hooks) {
+            started = true;
+            saw_stop = !cooperative_sleep(5s, hooks);
+            return fake_result(1, engine::Status::failed);
+        });
+    });
+    ch.master().send(1, Message::make(MessageKind::task, 0, 1));
+    while (!started)
+        std::this_thread::sleep_for(1ms);
+    ch.master().send(1, Message::make(MessageKind::quit));
+    worker.join();
+    EXPECT_TRUE(saw_stop);
+    EXPECT_EQ(ch.sent_to_master(), 0u);
+}
+
+TEST(Worker, StaleStopRequestsAreIgnored) {
+    InProcessChannels ch(1);
+    std::thread worker([&] {
+        run_worker(ch.worker(0), [](int task, const engine::RunHooks&) {
+            return fake_result(static_cast<std::uint64_t>(task), engine::Status::complete);
+        });
+    });
+    ch.master().send(1, Message::make(MessageKind::stop_now, 0));
+    ch.master().send(1, Message::make(MessageKind::task, 5, 1));
+    const auto reply = ch.master().receive(5s);
+    ASSERT_TRUE(reply);
+    EXPECT_EQ(reply->second.kind, MessageKind::result);
+    EXPECT_EQ(store::decode_result(reply->second.payload).seed, 5u);
+    ch.master().send(1, Message::make(MessageKind::quit));
+    worker.join();
+}
+
+}  // namespace
+}  // namespace hopper::campaign

@@ -1,0 +1,147 @@
+// The plan: every scene parameter is in the physics text, seeds match the config layer's task
+// list, resuming with different physics is refused naming what differs, extensions pass, and
+// the dispatch order puts the longest expected realizations first.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "hopper/campaign/plan.hpp"
+#include "hopper/core/error.hpp"
+
+namespace hopper::campaign {
+namespace {
+
+const char* const sweep_text = R"(
+[hopper]
+width_cm = 8.0
+particles = 80
+theta_deg = 60.0
+[material]
+collision_time_s = 8.0e-4
+[protocol]
+max_time_s = 5.0
+[campaign]
+name = "t"
+seed = 7
+realizations = 3
+[sweep]
+D_cm = [2.0, 3.0]
+)";
+
+config::SweepFile sweep(const std::string& extra = "", const std::string& base = sweep_text) {
+    return config::parse_sweep(base + extra, "<test>");
+}
+
+std::string refusal(const store::CampaignPlan& stored, const store::CampaignPlan& sweep_plan) {
+    try {
+        check_compatible(stored, sweep_plan);
+    } catch (const core::ConfigError& e) {
+        return e.what();
+    }
+    return "(accepted)";
+}
+
+TEST(Plan, SceneTextCoversEverySceneParameter) {
+    // If this fails, engine::SceneParams gained (or lost) a field: add it to scene_text() in
+    // src/campaign/plan.cpp (it decides which stores a sweep may resume), then update the size.
+    EXPECT_EQ(sizeof(engine::SceneParams), 336u);
+    engine::SceneParams p;
+    const std::string base = scene_text(p);
+    EXPECT_EQ(std::count(base.begin(), base.end(), '\n'), 40);
+    EXPECT_NE(base.find("material.collision_time_s=unset\n"), std::string::npos);
+    // Changing any one parameter changes the text.
+    auto changed = [&](auto mutate) {
+        engine::SceneParams q;
+        mutate(q);
+        return scene_text(q) != base;
+    };
+    EXPECT_TRUE(changed([](auto& q) { q.hopper.wall_spacing = 0.9; }));
+    EXPECT_TRUE(changed([](auto& q) { q.particles.density = 999; }));
+    EXPECT_TRUE(changed([](auto& q) { q.material.wall.mu = 0.1; }));
+    EXPECT_TRUE(changed([](auto& q) { q.material.collision_time = 8e-4; }));
+    EXPECT_TRUE(changed([](auto& q) { q.integrator.scheme = engine::Scheme::verlet; }));
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.t_check = 0.05; }));
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.empty_threshold = 3; }));
+    EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));
+    // Shortest round-trip numbers: one ulp differs.
+    EXPECT_TRUE(changed([](auto& q) { q.material.system.e_n = std::nextafter(0.5, 1.0); }));
+}
+
+TEST(Plan, SeedsAndLabelsMatchTheConfigTaskList) {
+    const auto s = sweep();
+    const auto plan = make_plan(s.campaign);
+    ASSERT_EQ(plan.points.size(), 2u);
+    EXPECT_EQ(plan.points[0].label, "D_cm=2 theta_deg=60");
+    EXPECT_EQ(plan.points[1].D_cm, 3.0);
+    EXPECT_EQ(plan.points[1].particles, 80);
+    for (const auto& t : config::expand_tasks(s.campaign))
+        EXPECT_EQ(plan.points[static_cast<std::size_t>(t.point_index)].seeds.at(
+                      static_cast<std::size_t>(t.realization)),
+                  t.seed);
+    EXPECT_EQ(plan.seed, 7u);
+}
+
+TEST(Plan, ExtensionIsAccepted) {
+    const auto stored = make_plan(sweep().campaign);
+    EXPECT_TRUE(check_compatible(stored, stored).empty());
+    const auto more =
+        make_plan(sweep("", std::string(sweep_text)
+                                .replace(std::string(sweep_text).find("realizations = 3"), 16,
+                                         "realizations = 5"))
+                      .campaign);
+    auto notes = check_compatible(stored, more);
+    ASSERT_EQ(notes.size(), 1u);
+    EXPECT_EQ(notes[0], "the sweep extends the campaign: 0 new point(s), 4 new realization(s)");
+    const auto extra_point = make_plan(sweep("[[points]]\nD_cm = 4.0\n").campaign);
+    notes = check_compatible(stored, extra_point);
+    ASSERT_EQ(notes.size(), 1u);
+    EXPECT_EQ(notes[0], "the sweep extends the campaign: 1 new point(s), 3 new realization(s)");
+    // Fewer realizations or a subset of points: nothing to add, nothing refused.
+    const auto fewer = make_plan(sweep("[[points]]\nD_cm = 2.0\nrealizations = 1\n",
+                                       "[hopper]\nwidth_cm = 8.0\nparticles = 80\ntheta_deg = "
+                                       "60\n[material]\ncollision_time_s = 8.0e-4\n[protocol]\n"
+                                       "max_time_s = 5.0\n[campaign]\nname = \"t\"\nseed = 7\n")
+                                     .campaign);
+    EXPECT_TRUE(check_compatible(stored, fewer).empty());
+}
+
+TEST(Plan, DifferentPhysicsIsRefusedNamingWhatDiffers) {
+    const auto stored = make_plan(sweep().campaign);
+    std::string base = sweep_text;
+    base.replace(base.find("[protocol]"), 10, "[protocol]\nmax_shakes = 3");
+    const std::string msg = refusal(stored, make_plan(sweep("", base).campaign));
+    EXPECT_NE(msg.find("the sweep file's physics differs from the store's for 2 point(s)"),
+              std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("point 'D_cm=2 theta_deg=60' and 1 more:\n    protocol.max_shakes = 3 "
+                       "(store: 10)"),
+              std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("run this sweep with another --store path"), std::string::npos);
+
+    std::string seeded = sweep_text;
+    seeded.replace(seeded.find("seed = 7"), 8, "seed = 8");
+    const std::string seed_msg = refusal(stored, make_plan(sweep("", seeded).campaign));
+    EXPECT_NE(seed_msg.find("campaign seed 8 differs from the store's 7"), std::string::npos)
+        << seed_msg;
+}
+
+TEST(Plan, LongestExpectedFirst) {
+    engine::SceneParams small, narrow, big;
+    small.particles.count = narrow.particles.count = 100;
+    big.particles.count = 1000;
+    narrow.hopper.outlet = small.hopper.outlet / 2;
+    EXPECT_GT(expected_cost(narrow), expected_cost(small));  // smaller D: slower flow
+    EXPECT_GT(expected_cost(big), expected_cost(small));     // more particles
+    engine::SceneParams fine = small;
+    fine.integrator.steps_per_collision *= 2;
+    EXPECT_GT(expected_cost(fine), expected_cost(small));  // more steps
+    engine::SceneParams capped = narrow;
+    capped.protocol.max_time = 0.01;
+    EXPECT_LT(expected_cost(capped), expected_cost(narrow));  // the time limit caps it
+}
+
+}  // namespace
+}  // namespace hopper::campaign

@@ -1,0 +1,295 @@
+// The store: every field survives journal -> HDF5 -> read back; resume and extension; a writer
+// killed at each dangerous moment (mid journal record, mid HDF5 update, mid rebuild, between
+// closing the file and the sync record) leaves a store that reopens with nothing lost; damaged
+// and foreign files are handled with clear errors.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <fstream>
+#include <functional>
+#include <tuple>
+
+#include "fixtures.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/store/store.hpp"
+
+namespace hopper::store {
+namespace {
+
+using testing::fabricated;
+using testing::point;
+using testing::result_record;
+using testing::run_record;
+using testing::scratch;
+namespace fs = std::filesystem;
+
+std::string message_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const core::StoreError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+bool contains(const std::string& s, const std::string& part) {
+    return s.find(part) != std::string::npos;
+}
+
+// The physics bytes (wall clock included: the store must keep them exactly).
+std::vector<std::pair<std::string, Bytes>> contents(const std::vector<StoredRealization>& v) {
+    std::vector<std::pair<std::string, Bytes>> out;
+    for (const auto& s : v)
+        out.emplace_back(s.label + "#" + std::to_string(s.record.realization) + " rank " +
+                             std::to_string(s.record.rank) + " seed " +
+                             std::to_string(s.record.seed),
+                         encode_result(s.result));
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+const PointPlan A = point("D_cm=3 theta_deg=60", 3);
+const PointPlan B = point("D_cm=4.5 theta_deg=60", 2);
+
+// A store with one finished run: A#0, A#1, B#0 stored (B#0 failed status), one error on A#2.
+fs::path finished_store(const fs::path& dir) {
+    const fs::path p = dir / "s.h5";
+    Store s(p);
+    EXPECT_TRUE(s.is_new());
+    s.begin_run(run_record({A, B}));
+    s.append(result_record(A, 0, fabricated(0)));
+    s.append(result_record(A, 1, fabricated(1, false)));
+    s.append(result_record(B, 0, fabricated(3)));  // status failed (3 % 4)
+    ErrorRecord e{A.label, 2, A.seeds[2], 2, 1, 1.7e9, "std::bad_alloc"};
+    s.append(e);
+    s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
+    return p;
+}
+
+TEST(Store, EveryFieldSurvivesJournalAndHdf5) {
+    const fs::path p = finished_store(scratch());
+    const auto from_h5 = read_realizations(p);
+    const auto from_journal = read_journal_realizations(p);
+    ASSERT_EQ(from_h5.size(), 3u);
+    EXPECT_EQ(contents(from_h5), contents(from_journal));
+    // Against what was appended, field by field through the encoding (wall clock included).
+    EXPECT_EQ(encode_result(from_h5[0].result), result_record(A, 0, fabricated(0)).result);
+    EXPECT_EQ(encode_result(from_h5[1].result), result_record(A, 1, fabricated(1, false)).result);
+    EXPECT_FALSE(from_h5[1].result.empty_time.has_value());
+    EXPECT_EQ(from_h5[2].label, B.label);
+    EXPECT_EQ(from_h5[2].record.task_seconds, 0.5);
+    EXPECT_EQ(from_h5[1].record.finished_unix, 1.7e9 + 1);
+    EXPECT_EQ(from_h5[0].record.rank, 1);
+}
+
+TEST(Store, StatusCountsDoneFailedErrorsAndPending) {
+    const fs::path p = finished_store(scratch());
+    const StoreStatus s = read_status(p);
+    EXPECT_EQ(s.total, 5);
+    EXPECT_EQ(s.done, 2);
+    EXPECT_EQ(s.failed, 2);  // B#0 (status failed) and A#2 (exception)
+    EXPECT_EQ(s.errors, 1);
+    EXPECT_EQ(s.pending, 1);
+    ASSERT_EQ(s.points.size(), 2u);
+    EXPECT_EQ(s.points[0].done, 2);
+    EXPECT_EQ(s.points[1].failed, 1);
+    ASSERT_EQ(s.failures.size(), 2u);
+    EXPECT_EQ(s.failures[0].reason, "std::bad_alloc");
+    EXPECT_TRUE(s.failures[0].exception);
+    EXPECT_FALSE(s.failures[1].exception);
+    EXPECT_TRUE(s.hdf5_in_step);
+    EXPECT_FALSE(s.writer_active);
+    ASSERT_EQ(s.runs.size(), 1u);
+    ASSERT_TRUE(s.runs[0].end.has_value());
+    EXPECT_EQ(s.runs[0].stored, 3);
+}
+
+TEST(Store, ResumeExtendsThePlanAndKeepsEverything) {
+    const fs::path p = finished_store(scratch());
+    Store s(p);
+    EXPECT_FALSE(s.is_new());
+    EXPECT_TRUE(s.notes().empty()) << s.notes().front();
+    ASSERT_NE(s.task(A.label, 0), nullptr);
+    EXPECT_EQ(s.task(A.label, 0)->state, TaskState::done);
+    EXPECT_EQ(s.task(A.label, 2)->state, TaskState::error);
+    EXPECT_EQ(s.task(B.label, 0)->state, TaskState::failed);
+    const PointPlan A5 = point(A.label, 5);
+    const PointPlan C = point("D_cm=6 theta_deg=60", 1);
+    s.begin_run(run_record({A5, C}));  // B not in this sweep: it stays in the plan
+    EXPECT_EQ(s.plan().points.size(), 3u);
+    EXPECT_EQ(s.plan().find(A.label)->realizations(), 5);
+    s.append(result_record(A5, 2, fabricated(5)));
+    s.append(result_record(A5, 4, fabricated(6)));
+    s.append(result_record(C, 0, fabricated(7)));
+    s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
+    const StoreStatus st = read_status(p);
+    EXPECT_EQ(st.total, 8);
+    EXPECT_EQ(st.done, 4);
+    EXPECT_EQ(st.failed, 2);   // B#0, C#0 (status failed); A#2's exception is superseded
+    EXPECT_EQ(st.pending, 2);  // A#3, B#1
+    EXPECT_EQ(st.runs.size(), 2u);
+    EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
+    EXPECT_EQ(read_realizations(p).size(), 6u);
+}
+
+TEST(Store, StatusWorksWhileARunWrites) {
+    const fs::path p = scratch() / "s.h5";
+    Store s(p);
+    s.begin_run(run_record({A}));
+    s.append(result_record(A, 1, fabricated(1)));
+    const StoreStatus st = read_status(p);
+    EXPECT_TRUE(st.writer_active);
+    EXPECT_FALSE(st.hdf5_in_step);
+    EXPECT_EQ(st.done, 1);
+    EXPECT_EQ(st.pending, 2);
+    // A second writer is refused while the first holds the store.
+    EXPECT_TRUE(contains(message_of([&] { Store other(p); }), "in use by another"));
+}
+
+TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
+    const fs::path p = scratch() / "s.h5";
+    {
+        Store s(p, StoreOptions{0.0, "", 0});
+        s.begin_run(run_record({A, B}));
+        s.append(result_record(A, 0, fabricated(0)));
+        s.append(result_record(B, 1, fabricated(1)));
+        // destroyed without end_run: as if the master died
+    }
+    Store s(p);
+    ASSERT_EQ(s.notes().size(), 1u);
+    EXPECT_TRUE(contains(s.notes()[0], "not in step with the journal")) << s.notes()[0];
+    s.begin_run(run_record({A, B}));
+    s.append(result_record(A, 1, fabricated(2)));
+    s.end_run(RunEndRecord{utc_now(), "complete", 1, 1.0, 0.01});
+    EXPECT_EQ(read_realizations(p).size(), 3u);
+    EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
+}
+
+TEST(Store, DamagedOrMissingHdf5IsRebuilt) {
+    const fs::path dir = scratch();
+    const fs::path p = finished_store(dir);
+    const auto before = contents(read_journal_realizations(p));
+    fs::resize_file(p, fs::file_size(p) / 2);  // keeps the HDF5 signature, loses the rest
+    {
+        Store s(p);
+        ASSERT_FALSE(s.notes().empty());
+        EXPECT_TRUE(contains(s.notes()[0], "damaged")) << s.notes()[0];
+        s.begin_run(run_record({A, B}));
+        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    }
+    EXPECT_EQ(contents(read_realizations(p)), before);
+    fs::remove(p);
+    {
+        Store s(p);
+        ASSERT_FALSE(s.notes().empty());
+        EXPECT_TRUE(contains(s.notes()[0], "missing")) << s.notes()[0];
+        s.begin_run(run_record({A, B}));
+        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    }
+    EXPECT_EQ(contents(read_realizations(p)), before);
+}
+
+TEST(Store, ForeignFilesAndAMissingJournalGiveClearErrors) {
+    const fs::path dir = scratch();
+    std::ofstream(dir / "notes.h5") << "some text file\n";
+    EXPECT_TRUE(contains(message_of([&] { Store s(dir / "notes.h5"); }),
+                         "exists and is not a hopper store (not an HDF5 file)"));
+    EXPECT_TRUE(
+        contains(message_of([&] { read_status(dir / "notes.h5"); }), "is not a hopper store"));
+    const fs::path p = finished_store(dir);
+    fs::remove(journal_path(p));
+    EXPECT_TRUE(contains(message_of([&] { Store s(p); }), "has no journal"));
+    EXPECT_EQ(read_realizations(p).size(), 3u) << "the file alone stays readable";
+    EXPECT_TRUE(contains(message_of([&] { read_status(dir / "nothing.h5"); }), "no store at"));
+    // A journal beside a file that is not a store: the file is not overwritten.
+    const fs::path q = dir / "q.h5";
+    { Store s(q); }
+    std::ofstream(q) << "not hdf5";
+    EXPECT_TRUE(contains(message_of([&] { Store s(q); }), "although its journal"));
+}
+
+// Runs `work` in a child process that is expected to die of SIGKILL (a crash injected by the
+// store), and returns whether it did.
+bool dies_of_sigkill(const std::function<void()>& work) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+        try {
+            work();
+        } catch (...) {
+            _exit(3);
+        }
+        _exit(0);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+}
+
+class CrashPoint : public ::testing::TestWithParam<std::pair<const char*, int>> {};
+
+TEST_P(CrashPoint, KilledWriterLosesNothingCountedAsDone) {
+    const auto [where, n] = GetParam();
+    const fs::path p = scratch() / "s.h5";
+    {  // one finished run first, so that the HDF5 file exists and is in step
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        s.append(result_record(A, 0, fabricated(0)));
+        s.end_run(RunEndRecord{utc_now(), "complete", 1, 1.0, 0.01});
+    }
+    if (std::string(where) == "rebuild") fs::remove(p);  // force a rebuild in the child
+    ASSERT_TRUE(dies_of_sigkill([&, where = where, n = n] {
+        Store s(p, StoreOptions{0.0, where, n});
+        s.begin_run(run_record({A, B}));
+        s.append(result_record(A, 1, fabricated(1)));
+        s.append(result_record(A, 2, fabricated(2)));
+        s.append(result_record(B, 0, fabricated(4)));
+        s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
+    })) << "the crash was not injected at "
+        << where;
+    // Reopen: whatever finished before the kill is there exactly once; the rest runs again.
+    const std::vector<std::tuple<const PointPlan*, int, int>> work = {
+        {&A, 1, 1}, {&A, 2, 2}, {&B, 0, 4}};  // (point, realization, fabricated k)
+    {
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        for (const auto& [pt, r, k] : work)
+            if (s.task(pt->label, r)->state == TaskState::pending)
+                s.append(result_record(*pt, r, fabricated(k)));
+        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    }
+    std::vector<StoredRealization> expected(1);
+    expected[0].label = A.label;
+    expected[0].record = result_record(A, 0, fabricated(0));
+    expected[0].result = decode_result(expected[0].record.result);
+    for (const auto& [pt, r, k] : work) {
+        StoredRealization e;
+        e.label = pt->label;
+        e.record = result_record(*pt, r, fabricated(k));
+        e.result = decode_result(e.record.result);
+        expected.push_back(e);
+    }
+    const auto h5 = read_realizations(p);
+    EXPECT_EQ(contents(h5), contents(expected));
+    EXPECT_EQ(contents(read_journal_realizations(p)), contents(expected));
+    const StoreStatus st = read_status(p);
+    EXPECT_EQ(st.done + st.failed, 4);
+    EXPECT_TRUE(st.hdf5_in_step);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Store, CrashPoint,
+    ::testing::Values(std::pair{"journal", 1},  // mid run_start record
+                      std::pair{"journal", 3},  // mid second result record
+                      std::pair{"journal", 5},  // mid run_end record
+                      std::pair{"hdf5", 2},     // partial HDF5 update after the 2nd result
+                      std::pair{"rebuild", 1},  // rebuilt file written, not yet renamed
+                      std::pair{"close", 1}),   // file closed, sync record not yet written
+    [](const auto& param_info) {
+        return std::string(param_info.param.first) + "_" + std::to_string(param_info.param.second);
+    });
+
+}  // namespace
+}  // namespace hopper::store
