@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <sstream>
 
 #include "hopper/core/error.hpp"
@@ -72,6 +73,31 @@ void gear_correct_axis(std::size_t n, double dt, double g, const double* __restr
         x3[i] += gear_c3 * e;
         x4[i] += gear_c4 * e;
     }
+}
+
+// Counting sort of points into an nx x ny grid of cells of size cs with origin (x0, y0);
+// points outside are clamped into the border cells (which keeps a neighbour search correct).
+// Afterwards the points of cell c are items[start[c]] .. items[start[c + 1] - 1], in input
+// order, and cell_of[k] is the cell of point k.
+void bin_points(std::span<const double> xs, std::span<const double> ys, double x0, double y0,
+                double cs, int nx, int ny, std::vector<int>& start, std::vector<int>& items,
+                std::vector<int>& cell_of) {
+    const std::size_t n = xs.size();
+    const int ncell = nx * ny;
+    cell_of.resize(n);
+    start.assign(ncell + 1, 0);
+    for (std::size_t k = 0; k < n; ++k) {
+        const int cx = std::clamp(int((xs[k] - x0) / cs), 0, nx - 1);
+        const int cy = std::clamp(int((ys[k] - y0) / cs), 0, ny - 1);
+        cell_of[k] = cx + cy * nx;
+        ++start[cell_of[k] + 1];
+    }
+    for (int c = 0; c < ncell; ++c)
+        start[c + 1] += start[c];
+    items.resize(n);
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < n; ++k)
+        items[fill[cell_of[k]]++] = int(k);
 }
 
 // Largest squared displacement since the last rebuild; NaN if any position is not finite.
@@ -580,21 +606,9 @@ void System::build_wall_grid(double cutoff) {
     wgrid_y0_ = y0 - cutoff;
     wgrid_nx_ = std::max(1, int(std::ceil((x1 - x0 + 2 * cutoff) / cutoff)));
     wgrid_ny_ = std::max(1, int(std::ceil((y1 - y0 + 2 * cutoff) / cutoff)));
-    const int ncell = wgrid_nx_ * wgrid_ny_;
-    std::vector<int> cell(nw);
-    wcell_start_.assign(ncell + 1, 0);
-    for (std::size_t k = 0; k < nw; ++k) {
-        const int cx = std::clamp(int((wx_[k] - wgrid_x0_) / cutoff), 0, wgrid_nx_ - 1);
-        const int cy = std::clamp(int((wy_[k] - wgrid_y0_) / cutoff), 0, wgrid_ny_ - 1);
-        cell[k] = cx + cy * wgrid_nx_;
-        ++wcell_start_[cell[k] + 1];
-    }
-    for (int c = 0; c < ncell; ++c)
-        wcell_start_[c + 1] += wcell_start_[c];
-    wcell_items_.assign(nw, 0);
-    std::vector<int> fill(wcell_start_.begin(), wcell_start_.end() - 1);
-    for (std::size_t k = 0; k < nw; ++k)
-        wcell_items_[fill[cell[k]]++] = int(k);
+    std::vector<int> cell;
+    bin_points(wx_, wy_, wgrid_x0_, wgrid_y0_, cutoff, wgrid_nx_, wgrid_ny_, wcell_start_,
+               wcell_items_, cell);
     walls_changed_ = false;
 }
 
@@ -636,22 +650,8 @@ void System::permute_by_cell(double cutoff) {
     grid_nx_ = std::max(1, int((x1 - x0) / cs) + 1);
     grid_ny_ = std::max(1, int((y1 - y0) / cs) + 1);
     const int ncell = grid_nx_ * grid_ny_;
-    cell_of_.resize(n);
-    cell_start_.assign(ncell + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-        const int cx = std::clamp(int((x_[i] - x0) / cs), 0, grid_nx_ - 1);
-        const int cy = std::clamp(int((y_[i] - y0) / cs), 0, grid_ny_ - 1);
-        cell_of_[i] = cx + cy * grid_nx_;
-        ++cell_start_[cell_of_[i] + 1];
-    }
-    for (int c = 0; c < ncell; ++c)
-        cell_start_[c + 1] += cell_start_[c];
     // Counting sort: order_[new index] = old index.
-    order_.resize(n);
-    std::vector<int>& fill = iscratch_;
-    fill.assign(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i)
-        order_[fill[cell_of_[i]]++] = int(i);
+    bin_points(x_, y_, x0, y0, cs, grid_nx_, grid_ny_, cell_start_, order_, cell_of_);
     for (auto* col : {&x_,     &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_, &inv_m_,
                       &inv_I_, &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
         permute(*col, order_, scratch_);
