@@ -9,6 +9,7 @@ packages=(
   libhdf5-dev hdf5-tools libopenmpi-dev openmpi-bin
   libgtest-dev googletest
   python3 python3-numpy python3-scipy python3-matplotlib python3-h5py
+  slurm-wlm munge  # the local single-node Slurm of the `slurm` tests (slurm/slurm-up.sh)
 )
 
 missing=()

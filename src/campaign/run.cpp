@@ -207,6 +207,11 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     if (launched_by_mpi()) mpi.emplace();
     const int rank = mpi ? mpi->rank() : 0;
     const int size = mpi ? mpi->size() : 1;
+    // After the master's run (its Store closed): the caller's after_run hook, if any.
+    const auto finish = [&opt](const Campaign& c, int code) {
+        if (!opt.after_run) return code;
+        return opt.after_run(opt.store ? *opt.store : c.sweep.campaign.store, code);
+    };
 
     if (size > 1) {
         // Every rank reads the sweep; all must succeed before anyone goes on.
@@ -235,7 +240,8 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
         bool dispatching = false;
         QuitWorkers quit(*ch);
         try {
-            return run_master(opt, c, *ch, std::move(hosts), size, &dispatching, out, err);
+            return finish(c,
+                          run_master(opt, c, *ch, std::move(hosts), size, &dispatching, out, err));
         } catch (const std::exception& e) {
             if (!dispatching) throw;
             // Workers may be busy (and blocked sending a large result): end the job. Every
@@ -262,7 +268,8 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     } join{threads};
     QuitWorkers quit(channels.master());
     bool dispatching = false;
-    return run_master(opt, c, channels.master(), {host_name()}, size, &dispatching, out, err);
+    return finish(
+        c, run_master(opt, c, channels.master(), {host_name()}, size, &dispatching, out, err));
 }
 
 }  // namespace hopper::campaign

@@ -11,10 +11,12 @@
 #include <string_view>
 #include <vector>
 
+#include "cli/analyze.hpp"
 #include "cli/options.hpp"
 #include "cli/run.hpp"
 #include "cli/simulate.hpp"
 #include "cli/status.hpp"
+#include "cli/submit.hpp"
 #include "hopper/core/error.hpp"
 
 #ifndef HOPPER_VERSION
@@ -33,11 +35,13 @@ struct Command {
     std::string_view summary;
 };
 
-// The commands this build has (analyze/submit come with their own issues).
+// The commands this build has.
 constexpr Command commands[] = {
     {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)"},
     {"status", "progress and failures of a store (works while a run writes it)"},
+    {"analyze", "statistics and fits of a store, written into its /analysis group"},
     {"simulate", "run one realization of one scene of a sweep file (no MPI)"},
+    {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself"},
 };
 
 std::string available_commands() {
@@ -180,6 +184,14 @@ int main(int argc, char** argv) {
                 hopper::cli::print_status_help(std::cout);
                 return 0;
             }
+            if (args[1] == "analyze") {
+                hopper::cli::print_analyze_help(std::cout);
+                return 0;
+            }
+            if (args[1] == "submit") {
+                hopper::cli::print_submit_help(std::cout);
+                return 0;
+            }
             return error("no help for unknown command '" + args[1] +
                              "' (available: " + available_commands() + ")",
                          exit_usage);
@@ -193,6 +205,8 @@ int main(int argc, char** argv) {
             return hopper::cli::run_command(rest, line);
         }
         if (command == "status") return hopper::cli::status_command(rest);
+        if (command == "analyze") return hopper::cli::analyze_command(rest);
+        if (command == "submit") return hopper::cli::submit_command(rest);
         if (command.starts_with("-"))
             return error("unknown option '" + command + "' (try 'campaign --help')", exit_usage);
         return error("unknown command '" + command + "' (available: " + available_commands() + ")",

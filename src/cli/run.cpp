@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "cli/analyze.hpp"
 #include "cli/options.hpp"
 #include "hopper/campaign/run.hpp"
 #include "hopper/core/error.hpp"
@@ -13,6 +14,7 @@
 #endif
 
 namespace po = boost::program_options;
+namespace fs = std::filesystem;
 
 namespace hopper::cli {
 
@@ -123,6 +125,25 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     }
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;
+    // At the end of a run that was not stopped: the same analysis as `campaign analyze`.
+    opt.after_run = [](const std::filesystem::path& store, int code) {
+        if (code == campaign::run_stopped) return code;
+        std::cout << '\n';
+        try {
+            if (analyze_store(store, false, true, std::cout, std::cerr) != 0) return code;
+        } catch (const std::exception& e) {
+            std::cerr << "campaign: the analysis failed (the realizations are stored; retry with "
+                         "`campaign analyze "
+                      << store.string() << "`): " << e.what() << std::endl;
+            return code;
+        }
+        fs::path out = store;
+        out.replace_extension();
+        std::cout << "plots: /usr/bin/python3 analysis/plots.py " << store.string() << " --out "
+                  << out.string() << "_plots\n";
+        std::cout.flush();
+        return code;
+    };
     return campaign::run_campaign(opt, std::cout, std::cerr);
 }
 

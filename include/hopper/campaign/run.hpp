@@ -38,6 +38,10 @@ struct RunOptions {
     std::function<engine::RealizationResult(const config::Task&, const engine::SceneParams&,
                                             const engine::RunHooks&)>
         runner;
+    // Called on the master only, after the run has ended and the store is closed and unlocked,
+    // with the store's path and the exit code; returns the exit code. `campaign run` analyzes
+    // the store here (the campaign layer knows nothing of the statistics).
+    std::function<int(const std::filesystem::path& store, int code)> after_run;
 };
 
 // Returns the exit code (RunExit). The summary table goes to `out`, progress and notes to `err`.

@@ -1,0 +1,374 @@
+#include "cli/submit.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <boost/program_options.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <sstream>
+
+#include "cli/options.hpp"
+#include "cli/simulate.hpp"
+#include "hopper/config/sweep.hpp"
+#include "hopper/core/error.hpp"
+
+namespace hopper::cli {
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+
+namespace {
+
+using core::ConfigError;
+
+po::options_description submit_options() {
+    po::options_description d("submit options");
+    d.add_options()  //
+        ("store", po::value<std::string>()->value_name("PATH"),
+         "the store (default: [campaign] store of the sweep file, relative to it)")               //
+        ("nodes", po::value<std::string>()->value_name("N"), "nodes per allocation (default 1)")  //
+        ("ntasks", po::value<std::string>()->value_name("N"),
+         "MPI ranks per allocation: 1 master + N-1 workers (default 2)")  //
+        ("time", po::value<std::string>()->value_name("T"),
+         "time limit of each allocation: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS "
+         "(default 1:00:00)")                                                        //
+        ("partition", po::value<std::string>()->value_name("P"), "Slurm partition")  //
+        ("account", po::value<std::string>()->value_name("A"), "Slurm account")      //
+        ("max-resubmits", po::value<std::string>()->value_name("K"),
+         "resubmit at most K times while realizations are pending (default 10)")  //
+        ("signal-lead", po::value<std::string>()->value_name("S"),
+         "ask Slurm for SIGUSR1 S seconds before the limit (default 120; Slurm may send it up "
+         "to a minute later)")  //
+        ("grace", po::value<std::string>()->value_name("S"),
+         "after the signal, running realizations may finish within S seconds (default 60; "
+         "less than --signal-lead)")  //
+        ("launcher", po::value<std::string>()->value_name("L"),
+         "srun (srun --mpi=pmix, default), mpirun, or none (one process)")  //
+        ("setup", po::value<std::string>()->value_name("FILE"),
+         "a shell file the job sources first (module load ...)")  //
+        ("job-name", po::value<std::string>()->value_name("NAME"),
+         "Slurm job name (default: hopper-<campaign name>)")  //
+        ("template", po::value<std::string>()->value_name("FILE"),
+         "render FILE instead of the built-in slurm/hopper.sbatch.in")                      //
+        ("dry-run", po::bool_switch(), "print the batch script; write and submit nothing")  //
+        ("help,h", "show this help");
+    return d;
+}
+
+// Positive integer option in [1, max].
+long positive(const po::variables_map& vm, const char* name, long fallback, long max) {
+    if (!vm.count(name)) return fallback;
+    const std::string& text = vm[name].as<std::string>();
+    const std::uint64_t v = parse_seed(std::string("--") + name, text);
+    if (v < 1 || v > static_cast<std::uint64_t>(max))
+        throw ConfigError(std::string("--") + name + " must be between 1 and " +
+                          std::to_string(max) + ", got '" + text + "'");
+    return static_cast<long>(v);
+}
+
+// A Slurm name (partition, account, job name): letters, digits, '_', '-', '.'.
+std::string slurm_name(const po::variables_map& vm, const char* name, const std::string& fallback) {
+    if (!vm.count(name)) return fallback;
+    const std::string& text = vm[name].as<std::string>();
+    static const std::regex ok("[A-Za-z0-9_.-]{1,64}");
+    if (!std::regex_match(text, ok))
+        throw ConfigError(std::string("--") + name +
+                          " must be 1-64 letters, digits, '_', '-' or '.', got '" + text + "'");
+    return text;
+}
+
+// A path for the batch script, in single quotes (no quote, newline or NUL inside).
+std::string quoted(const std::string& what, const fs::path& p) {
+    const std::string s = p.string();
+    if (s.find_first_of(std::string("'\n\r\0", 4)) != std::string::npos)
+        throw ConfigError(what + " must not contain a quote or a newline: '" + s + "'");
+    return "'" + s + "'";
+}
+
+fs::path self_executable() {
+    std::error_code ec;
+    const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+    if (ec) throw std::runtime_error("cannot find the campaign executable: " + ec.message());
+    return p;
+}
+
+std::string read_file(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    if (!in) throw ConfigError("cannot read the template '" + p.string() + "'");
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+// The first executable `name` on PATH, or empty.
+fs::path on_path(const std::string& name) {
+    const char* path = std::getenv("PATH");
+    std::stringstream dirs(path ? path : "");
+    std::string dir;
+    while (std::getline(dirs, dir, ':')) {
+        const fs::path p = fs::path(dir.empty() ? "." : dir) / name;
+        if (::access(p.c_str(), X_OK) == 0) return p;
+    }
+    return {};
+}
+
+// Runs argv, returns (exit code, stdout+stderr).
+std::pair<int, std::string> run_capture(const std::vector<std::string>& argv) {
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
+    const pid_t pid = ::fork();
+    if (pid < 0) throw std::runtime_error("fork failed");
+    if (pid == 0) {
+        ::dup2(fds[1], 1);
+        ::dup2(fds[1], 2);
+        ::close(fds[0]);
+        ::close(fds[1]);
+        std::vector<char*> args;
+        for (const auto& a : argv)
+            args.push_back(const_cast<char*>(a.c_str()));
+        args.push_back(nullptr);
+        ::execv(args[0], args.data());
+        ::_exit(127);
+    }
+    ::close(fds[1]);
+    std::string out;
+    std::array<char, 4096> buf;
+    ssize_t n;
+    while ((n = ::read(fds[0], buf.data(), buf.size())) > 0)
+        out.append(buf.data(), static_cast<std::size_t>(n));
+    ::close(fds[0]);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
+}
+
+}  // namespace
+
+long parse_slurm_time(const std::string& option, const std::string& text) {
+    // D-HH[:MM[:SS]] or MM, MM:SS, HH:MM:SS.
+    static const std::regex days(R"((\d+)-(\d+)(?::(\d+)(?::(\d+))?)?)");
+    static const std::regex clock(R"((\d+)(?::(\d+)(?::(\d+))?)?)");
+    std::smatch m;
+    long s = 0;
+    auto num = [&](int i) { return m[i].matched ? std::stol(m[i].str()) : 0L; };
+    if (text.size() <= 12 && std::regex_match(text, m, days)) {
+        s = num(1) * 86400 + num(2) * 3600 + num(3) * 60 + num(4);
+    } else if (text.size() <= 12 && std::regex_match(text, m, clock)) {
+        if (m[3].matched)
+            s = num(1) * 3600 + num(2) * 60 + num(3);
+        else
+            s = num(1) * 60 + num(2);
+    } else {
+        throw ConfigError(option +
+                          " must be a Slurm time (MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or "
+                          "D-HH:MM:SS), got '" +
+                          text + "'");
+    }
+    if (s <= 0) throw ConfigError(option + " must be longer than zero, got '" + text + "'");
+    return s;
+}
+
+std::string render_template(const std::string& tmpl,
+                            const std::map<std::string, std::string>& values) {
+    std::string out;
+    std::istringstream lines(tmpl);
+    std::string line;
+    int number = 0;
+    while (std::getline(lines, line)) {
+        ++number;
+        std::string rendered;
+        bool any = false, all_empty = true;
+        std::size_t pos = 0;
+        for (;;) {
+            const std::size_t open = line.find("{{", pos);
+            if (open == std::string::npos) {
+                rendered += line.substr(pos);
+                break;
+            }
+            const std::size_t close = line.find("}}", open);
+            if (close == std::string::npos)
+                throw ConfigError("template line " + std::to_string(number) +
+                                  ": '{{' without '}}'");
+            const std::string name = line.substr(open + 2, close - open - 2);
+            const auto it = values.find(name);
+            if (it == values.end())
+                throw ConfigError("template line " + std::to_string(number) +
+                                  ": unknown placeholder {{" + name + "}}");
+            any = true;
+            all_empty = all_empty && it->second.empty();
+            rendered += line.substr(pos, open - pos) + it->second;
+            pos = close + 2;
+        }
+        if (any && all_empty && line.starts_with("#SBATCH")) continue;
+        out += rendered + '\n';
+    }
+    return out;
+}
+
+void print_submit_help(std::ostream& os) {
+    os << "usage: campaign submit SWEEP.toml [--nodes N] [--ntasks N] [--time T]\n"
+          "                       [--partition P] [--account A] [--max-resubmits K]\n"
+          "                       [--signal-lead S] [--grace S] [--launcher srun|mpirun|none]\n"
+          "                       [--setup FILE] [--job-name NAME] [--template FILE]\n"
+          "                       [--store PATH] [--dry-run]\n\n"
+          "Submits the campaign of a sweep file to Slurm. The batch script (written next to the\n"
+          "store as STORE.sbatch, its log STORE.slurm.log) runs `campaign run` under srun or\n"
+          "mpirun, asks Slurm for SIGUSR1 before the time limit, drains on it (running\n"
+          "realizations finish within the grace time and are stored) and resubmits itself\n"
+          "while the store has pending realizations, at most K times. Submitting again resumes.\n\n"
+       << submit_options();
+}
+
+int submit_command(const std::vector<std::string>& args) {
+    po::options_description all = submit_options();
+    all.add_options()("sweep", po::value<std::vector<std::string>>());
+    po::positional_options_description positional;
+    positional.add("sweep", -1);
+    po::variables_map vm;
+    po::store(
+        po::command_line_parser(args)
+            .options(all)
+            .positional(positional)
+            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
+            .run(),
+        vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+        print_submit_help(std::cout);
+        return 0;
+    }
+    const auto sweeps =
+        vm.count("sweep") ? vm["sweep"].as<std::vector<std::string>>() : std::vector<std::string>{};
+    if (sweeps.empty()) throw ConfigError("missing the sweep file (SWEEP.toml)");
+    if (sweeps.size() > 1)
+        throw ConfigError("expected one sweep file, got " + std::to_string(sweeps.size()) + ": '" +
+                          sweeps[0] + "', '" + sweeps[1] + "'" +
+                          (sweeps.size() > 2 ? ", ..." : ""));
+
+    // The sweep file is checked here, on the login node, not in the queue.
+    const config::SweepFile sweep = config::load_sweep(sweeps[0]);
+    if (!sweep.has_campaign)
+        throw ConfigError("'" + sweeps[0] + "' has no [campaign] section: nothing to submit");
+    fs::path store = sweep.campaign.store;
+    if (vm.count("store")) {
+        const std::string& s = vm["store"].as<std::string>();
+        if (s.empty()) throw ConfigError("--store must not be empty");
+        store = s;
+    }
+    store = fs::absolute(store).lexically_normal();
+    const fs::path script = store.string() + ".sbatch";
+    const fs::path log = store.string() + ".slurm.log";
+
+    const long nodes = positive(vm, "nodes", 1, 100000);
+    const long ntasks = positive(vm, "ntasks", 2, 10000000);
+    if (ntasks < nodes)
+        throw ConfigError("--ntasks (" + std::to_string(ntasks) + ") must be at least --nodes (" +
+                          std::to_string(nodes) + ")");
+    const std::string time = vm.count("time") ? vm["time"].as<std::string>() : "1:00:00";
+    const long limit = parse_slurm_time("--time", time);
+    const long lead = positive(vm, "signal-lead", 120, 65535);
+    const long max_resubmits = vm.count("max-resubmits")
+                                   ? static_cast<long>(parse_seed(
+                                         "--max-resubmits", vm["max-resubmits"].as<std::string>()))
+                                   : 10;
+    if (max_resubmits > 10000)
+        throw ConfigError("--max-resubmits must be at most 10000, got " +
+                          std::to_string(max_resubmits));
+    double grace = 60.0;
+    if (vm.count("grace")) {
+        grace = parse_finite("--grace", vm["grace"].as<std::string>());
+        if (grace < 0) throw ConfigError("--grace must be >= 0");
+    }
+    if (lead >= limit)
+        throw ConfigError("--signal-lead (" + std::to_string(lead) +
+                          " s) must be shorter than --time (" + time + " = " +
+                          std::to_string(limit) + " s)");
+    if (grace >= static_cast<double>(lead))
+        throw ConfigError("--grace (" + std::to_string(static_cast<long>(grace)) +
+                          " s) must be shorter than --signal-lead (" + std::to_string(lead) +
+                          " s), so that the drain ends before the limit");
+    const std::string launcher = vm.count("launcher") ? vm["launcher"].as<std::string>() : "srun";
+    if (launcher != "srun" && launcher != "mpirun" && launcher != "none")
+        throw ConfigError("--launcher must be srun, mpirun or none, got '" + launcher + "'");
+    std::string setup = "# (no --setup file)";
+    if (vm.count("setup")) {
+        const fs::path f = fs::absolute(vm["setup"].as<std::string>());
+        if (!fs::is_regular_file(f))
+            throw ConfigError("--setup file '" + f.string() + "' does not exist");
+        setup = "source " + quoted("--setup", f);
+    }
+    const std::string job_name = slurm_name(
+        vm, "job-name",
+        "hopper-" + (sweep.campaign.name.empty() ? std::string("campaign") : sweep.campaign.name));
+    if (!std::regex_match(job_name, std::regex("[A-Za-z0-9_.-]{1,64}")))
+        throw ConfigError("the campaign name makes a bad job name '" + job_name +
+                          "': give --job-name");
+
+    std::ostringstream grace_text;
+    grace_text << grace;
+    const std::map<std::string, std::string> values{
+        {"JOB_NAME", job_name},
+        {"NODES", std::to_string(nodes)},
+        {"NTASKS", std::to_string(ntasks)},
+        {"TIME", time},
+        {"PARTITION", slurm_name(vm, "partition", "")},
+        {"ACCOUNT", slurm_name(vm, "account", "")},
+        {"SIGNAL_LEAD", std::to_string(lead)},
+        {"LOG", log.string()},
+        {"CAMPAIGN", quoted("the campaign executable's path", self_executable())},
+        {"SWEEP", quoted("the sweep file's path", fs::absolute(sweeps[0]).lexically_normal())},
+        {"STORE", quoted("the store's path", store)},
+        {"SCRIPT", quoted("the batch script's path", script)},
+        {"LAUNCHER", launcher},
+        {"GRACE", grace_text.str()},
+        {"MAX_RESUBMITS", std::to_string(max_resubmits)},
+        {"SETUP", setup},
+    };
+    quoted("the log's path", log);  // #SBATCH --output= takes no quotes: no spaces either
+    if (log.string().find_first_of(" \t%") != std::string::npos)
+        throw ConfigError(
+            "the store's path must not contain spaces or '%' for Slurm's --output: '" +
+            log.string() + "'");
+    const std::string tmpl =
+        vm.count("template") ? read_file(vm["template"].as<std::string>()) : sbatch_template;
+    const std::string text = render_template(tmpl, values);
+
+    if (vm["dry-run"].as<bool>()) {
+        std::cout << text;
+        return 0;
+    }
+    const fs::path sbatch = on_path("sbatch");
+    if (sbatch.empty())
+        throw std::runtime_error(
+            "sbatch not found on PATH: submit on a Slurm login node, or use --dry-run to see the "
+            "batch script (slurm/slurm-up.sh starts a single-node Slurm on this machine)");
+    fs::create_directories(store.parent_path());
+    {
+        std::ofstream out(script, std::ios::trunc);
+        out << text;
+        if (!out.flush()) throw std::runtime_error("cannot write '" + script.string() + "'");
+    }
+    fs::permissions(script, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
+    const auto [code, output] = run_capture(
+        {sbatch.string(), "--parsable", "--export=ALL,HOPPER_ALLOCATION=1", script.string()});
+    if (code != 0)
+        throw std::runtime_error("sbatch " + script.string() + " failed (exit " +
+                                 std::to_string(code) + "): " + output);
+    std::string job = output.substr(0, output.find_first_of(";\n"));
+    std::cout << "submitted job " << job << " (" << job_name << ", " << nodes << " node(s), "
+              << ntasks << " task(s), --time " << time << " per allocation, at most "
+              << max_resubmits << " resubmission(s))\n"
+              << "  script  " << script.string() << "\n"
+              << "  follow  squeue -u $USER -n " << job_name << "\n"
+              << "          tail -f " << log.string() << "\n"
+              << "          campaign status " << store.string() << "\n";
+    return 0;
+}
+
+}  // namespace hopper::cli

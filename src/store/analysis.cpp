@@ -1,0 +1,143 @@
+// Derived groups (e.g. /analysis) in a store file: see include/hopper/store/analysis.hpp.
+
+#include "hopper/store/analysis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+#include "h5.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/store/store.hpp"
+#include "layout.hpp"
+
+namespace fs = std::filesystem;
+
+namespace hopper::store {
+
+namespace {
+
+void check_name(const std::string& name, const std::string& where) {
+    if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
+        throw std::invalid_argument("derived group: bad name '" + name + "' in " + where);
+}
+
+void validate(const DerivedGroup& g, const std::string& where) {
+    check_name(g.name, where);
+    const std::string here = where + g.name + "/";
+    std::set<std::string> names;
+    auto unique = [&](const std::string& n) {
+        check_name(n, here);
+        if (!names.insert(n).second)
+            throw std::invalid_argument("derived group: two members named '" + n + "' in " + here);
+    };
+    for (const auto& d : g.datasets) {
+        unique(d.name);
+        if (const auto* v = std::get_if<std::vector<double>>(&d.values))
+            for (double x : *v)
+                if (!std::isfinite(x))
+                    throw std::invalid_argument("derived group: non-finite value in " + here +
+                                                d.name + " (write 0 with a has_... flag)");
+    }
+    for (const auto& s : g.groups) {
+        unique(s.name);
+        validate(s, here);
+    }
+}
+
+void write_dataset(const h5::Id& loc, const DerivedDataset& d) {
+    const std::string what = "derived dataset '" + d.name + "'";
+    hsize_t n = 0;
+    std::visit([&](const auto& v) { n = v.size(); }, d.values);
+    const hsize_t chunk = std::clamp<hsize_t>(n, 1, 4096);
+    h5::Id ds;
+    if (const auto* dv = std::get_if<std::vector<double>>(&d.values)) {
+        ds = h5::create_column(loc, d.name, H5T_IEEE_F64LE, chunk);
+        h5::write_all(ds, H5T_NATIVE_DOUBLE, dv->data(), n, what);
+    } else if (const auto* iv = std::get_if<std::vector<std::int64_t>>(&d.values)) {
+        ds = h5::create_column(loc, d.name, H5T_STD_I64LE, chunk);
+        h5::write_all(ds, H5T_NATIVE_INT64, iv->data(), n, what);
+    } else if (const auto* bv = std::get_if<std::vector<bool>>(&d.values)) {
+        h5::Id type = h5::bool_type();
+        ds = h5::create_column(loc, d.name, type.get(), chunk);
+        std::vector<std::int8_t> b(bv->begin(), bv->end());
+        h5::write_all(ds, type.get(), b.data(), n, what);
+    } else {
+        const auto& s = std::get<std::vector<std::string>>(d.values);
+        h5::Id type = h5::string_type();
+        ds = h5::create_column(loc, d.name, type.get(), chunk);
+        std::vector<const char*> p;
+        p.reserve(s.size());
+        for (const auto& x : s)
+            p.push_back(x.c_str());
+        h5::write_all(ds, type.get(), p.data(), n, what);
+    }
+    h5::set_attr(ds, "description", d.description);
+    if (!std::holds_alternative<std::vector<std::string>>(d.values))
+        h5::set_attr(ds, "units", d.units.empty() ? std::string("1") : d.units);
+}
+
+void write_group(const h5::Id& parent, const DerivedGroup& g) {
+    h5::Id grp = h5::create_group(parent, g.name);
+    for (const auto& [k, v] : g.attributes)
+        h5::set_attr(grp, k, v);
+    for (const auto& d : g.datasets)
+        write_dataset(grp, d);
+    for (const auto& s : g.groups)
+        write_group(grp, s);
+}
+
+}  // namespace
+
+void write_derived_group(const fs::path& store, const DerivedGroup& group) {
+    validate(group, "/");
+    h5::quiet_errors();
+    const StoreStatus status = read_status(store);
+    if (status.writer_active)
+        throw core::StoreError("'" + store.string() +
+                               "' is in use by a `campaign run`; analyze it when the run has "
+                               "ended (the analysis is written at the end of every run)");
+    const layout::Inspection in = layout::inspect(store);
+    if (!status.hdf5_in_step || !in.readable || !in.consistent)
+        throw core::StoreError("the HDF5 file '" + store.string() +
+                               "' is not in step with its journal" +
+                               (in.problem.empty() ? std::string() : " (" + in.problem + ")") +
+                               "; run `campaign run` on it once to rebuild it, then analyze again");
+
+    h5::Id file = h5::open_file(store, true);
+    // Not consistent while the group is replaced: a kill in between leaves a file the next run
+    // rebuilds from the journal instead of one that looks in step.
+    h5::set_attr(file, "consistent", std::int64_t{0});
+    h5::flush(file);
+    if (h5::exists(file, group.name))
+        h5::check_status(H5Ldelete(file.get(), group.name.c_str(), H5P_DEFAULT),
+                         "cannot delete the previous group '/" + group.name + "'");
+    write_group(file, group);
+    h5::flush(file);
+    h5::set_attr(file, "consistent", std::int64_t{1});
+    h5::close_file(file);
+}
+
+std::vector<std::string> derived_group_members(const fs::path& store, const std::string& name) {
+    h5::quiet_errors();
+    h5::Id file = h5::open_file(store, false);
+    std::vector<std::string> out;
+    if (!h5::exists(file, name)) return out;
+    h5::Id g = h5::open_group(file, name);
+    H5G_info_t info;
+    h5::check_status(H5Gget_info(g.get(), &info), "cannot list '/" + name + "'");
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+        const ssize_t len = H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr,
+                                               0, H5P_DEFAULT);
+        h5::check(static_cast<hid_t>(len), "cannot read a member name of '/" + name + "'");
+        std::string s(static_cast<std::size_t>(len), '\0');
+        H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, s.data(), s.size() + 1,
+                           H5P_DEFAULT);
+        out.push_back(s);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace hopper::store
