@@ -1,4 +1,5 @@
 #include "cli/analyze.hpp"
+#include "cli/parse.hpp"
 
 #include <algorithm>
 #include <boost/program_options.hpp>
@@ -797,19 +798,7 @@ int analyze_command(const std::vector<std::string>& args) {
     d.add_options()("json", po::bool_switch(), "print one JSON object")  //
         ("no-write", po::bool_switch(), "do not write /analysis")        //
         ("help,h", "show this help");
-    po::options_description all = d;
-    all.add_options()("store", po::value<std::vector<std::string>>());
-    po::positional_options_description positional;
-    positional.add("store", -1);
-    po::variables_map vm;
-    po::store(
-        po::command_line_parser(args)
-            .options(all)
-            .positional(positional)
-            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
-            .run(),
-        vm);
-    po::notify(vm);
+    const po::variables_map vm = parse_command(args, d, "store");
     if (vm.count("help")) {
         print_analyze_help(std::cout);
         return 0;

@@ -13,6 +13,7 @@
 
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
+#include "cli/parse.hpp"
 #include "cli/run.hpp"
 #include "cli/simulate.hpp"
 #include "cli/status.hpp"
@@ -29,6 +30,7 @@ namespace {
 
 using hopper::cli::exit_error;
 using hopper::cli::exit_usage;
+using hopper::cli::parse_command;
 
 struct Command {
     std::string_view name;
@@ -97,19 +99,7 @@ const std::string& required(const po::variables_map& vm, const char* name) {
 }
 
 int simulate_command(const std::vector<std::string>& args) {
-    po::options_description all = simulate_options();
-    all.add_options()("sweep", po::value<std::vector<std::string>>());
-    po::positional_options_description positional;
-    positional.add("sweep", -1);
-    po::variables_map vm;
-    po::store(
-        po::command_line_parser(args)
-            .options(all)
-            .positional(positional)
-            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
-            .run(),
-        vm);
-    po::notify(vm);
+    const po::variables_map vm = parse_command(args, simulate_options(), "sweep");
     if (vm.count("help")) {
         print_simulate_help(std::cout);
         return 0;

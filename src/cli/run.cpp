@@ -1,4 +1,5 @@
 #include "cli/run.hpp"
+#include "cli/parse.hpp"
 
 #include <boost/program_options.hpp>
 #include <cstdlib>
@@ -66,19 +67,7 @@ void print_run_help(std::ostream& os) {
 }
 
 int run_command(const std::vector<std::string>& args, const std::string& command_line) {
-    po::options_description all = run_options();
-    all.add_options()("sweep", po::value<std::vector<std::string>>());
-    po::positional_options_description positional;
-    positional.add("sweep", -1);
-    po::variables_map vm;
-    po::store(
-        po::command_line_parser(args)
-            .options(all)
-            .positional(positional)
-            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
-            .run(),
-        vm);
-    po::notify(vm);
+    const po::variables_map vm = parse_command(args, run_options(), "sweep");
     if (vm.count("help")) {
         print_run_help(std::cout);
         return 0;

@@ -1,4 +1,5 @@
 #include "cli/status.hpp"
+#include "cli/parse.hpp"
 
 #include <boost/program_options.hpp>
 #include <cstdio>
@@ -155,19 +156,7 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
 }
 
 int status_command(const std::vector<std::string>& args) {
-    po::options_description all = status_options();
-    all.add_options()("store", po::value<std::vector<std::string>>());
-    po::positional_options_description positional;
-    positional.add("store", -1);
-    po::variables_map vm;
-    po::store(
-        po::command_line_parser(args)
-            .options(all)
-            .positional(positional)
-            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
-            .run(),
-        vm);
-    po::notify(vm);
+    const po::variables_map vm = parse_command(args, status_options(), "store");
     if (vm.count("help")) {
         print_status_help(std::cout);
         return 0;

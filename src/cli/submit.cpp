@@ -1,4 +1,5 @@
 #include "cli/submit.hpp"
+#include "cli/parse.hpp"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -226,19 +227,7 @@ void print_submit_help(std::ostream& os) {
 }
 
 int submit_command(const std::vector<std::string>& args) {
-    po::options_description all = submit_options();
-    all.add_options()("sweep", po::value<std::vector<std::string>>());
-    po::positional_options_description positional;
-    positional.add("sweep", -1);
-    po::variables_map vm;
-    po::store(
-        po::command_line_parser(args)
-            .options(all)
-            .positional(positional)
-            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
-            .run(),
-        vm);
-    po::notify(vm);
+    const po::variables_map vm = parse_command(args, submit_options(), "sweep");
     if (vm.count("help")) {
         print_submit_help(std::cout);
         return 0;
