@@ -100,6 +100,22 @@ void bin_points(std::span<const double> xs, std::span<const double> ys, double x
         items[fill[cell_of[k]]++] = int(k);
 }
 
+// Velocity Verlet on one coordinate: the half kick v += dt/2 (force inv_mass + g), then, when
+// x is given, the drift x += dt v (x is null for the closing half kick and for rotation).
+void verlet_axis(std::size_t n, double dt, double g, const double* __restrict force,
+                 const double* __restrict inv_mass, double* __restrict v, double* __restrict x) {
+    const double hdt = 0.5 * dt;
+    if (x) {
+        for (std::size_t i = 0; i < n; ++i) {
+            v[i] += hdt * (force[i] * inv_mass[i] + g);
+            x[i] += dt * v[i];
+        }
+    } else {
+        for (std::size_t i = 0; i < n; ++i)
+            v[i] += hdt * (force[i] * inv_mass[i] + g);
+    }
+}
+
 // Largest squared displacement since the last rebuild; NaN if any position is not finite.
 double max_displacement2(std::size_t n, const double* __restrict x, const double* __restrict y,
                          const double* __restrict xr, const double* __restrict yr) {
@@ -157,28 +173,11 @@ struct KernelImpl final : System::Kernel {
             }
         } else {
             // Velocity Verlet: half kick with the last forces, then drift.
-            const double hdt = 0.5 * dt;
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-            double* __restrict x = s.x_.data();
-            double* __restrict y = s.y_.data();
-            double* __restrict vx = s.vx_.data();
-            double* __restrict vy = s.vy_.data();
-            const double* __restrict fx = s.fx_.data();
-            const double* __restrict fy = s.fy_.data();
-            const double* __restrict im = s.inv_m_.data();
-            for (std::size_t i = 0; i < n; ++i) {
-                vx[i] += hdt * (fx[i] * im[i] + gx);
-                vy[i] += hdt * (fy[i] * im[i] + gy);
-                x[i] += dt * vx[i];
-                y[i] += dt * vy[i];
-            }
-            if constexpr (rot) {
-                double* __restrict w = s.w_.data();
-                const double* __restrict tq = s.tq_.data();
-                const double* __restrict iI = s.inv_I_.data();
-                for (std::size_t i = 0; i < n; ++i)
-                    w[i] += hdt * tq[i] * iI[i];
-            }
+            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.x_.data());
+            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data());
+            if constexpr (rot)
+                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr);
         }
         return max_displacement2(n, s.x_.data(), s.y_.data(), s.xref_.data(), s.yref_.data());
     }
@@ -196,23 +195,11 @@ struct KernelImpl final : System::Kernel {
                 gear_correct_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), nullptr, s.w_.data(),
                                   s.w2_.data(), s.w3_.data(), s.w4_.data());
         } else {
-            const double hdt = 0.5 * dt;
-            double* __restrict vx = s.vx_.data();
-            double* __restrict vy = s.vy_.data();
-            const double* __restrict fx = s.fx_.data();
-            const double* __restrict fy = s.fy_.data();
-            const double* __restrict im = s.inv_m_.data();
-            for (std::size_t i = 0; i < n; ++i) {
-                vx[i] += hdt * (fx[i] * im[i] + gx);
-                vy[i] += hdt * (fy[i] * im[i] + gy);
-            }
-            if constexpr (rot) {
-                double* __restrict w = s.w_.data();
-                const double* __restrict tq = s.tq_.data();
-                const double* __restrict iI = s.inv_I_.data();
-                for (std::size_t i = 0; i < n; ++i)
-                    w[i] += hdt * tq[i] * iI[i];
-            }
+            // Velocity Verlet: the closing half kick with the new forces.
+            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), nullptr);
+            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), nullptr);
+            if constexpr (rot)
+                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr);
         }
     }
 

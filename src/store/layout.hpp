@@ -1,7 +1,7 @@
 #pragma once
 // The HDF5 layout of a store (private to the store layer): writing it from the journal's state
-// and reading realizations back. The layout is documented in the README ("Campaigns and the store"); `format_version` changes
-// whenever it changes incompatibly.
+// and reading realizations back. The layout is documented in the README ("Campaigns and the
+// store"); `format_version` changes whenever it changes incompatibly.
 
 #include <cstdint>
 #include <filesystem>

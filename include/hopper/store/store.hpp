@@ -3,8 +3,9 @@
 //
 // The journal (journal.hpp) is the source of truth: every record is fsync'd before the master
 // counts its realization as done. The HDF5 file is a self-describing view of the journal
-// (layout in the README, "Campaigns and the store"), updated as realizations arrive and closed in step with the journal at
-// the end of every run (a sync record names it). At the next open, a file that is not in step
+// (layout in the README, "Campaigns and the store"), updated as realizations arrive and closed in
+// step with the journal at the end of every run (a sync record names it). At the next open, a file
+// that is not in step
 // -- the writer was killed, the file is damaged or missing -- is rebuilt from the journal into a
 // temporary file and renamed into place, so a kill -9 at any moment loses nothing that was
 // counted as done and never leaves a corrupt store behind once `campaign run` has run again.
