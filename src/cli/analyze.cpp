@@ -803,13 +803,8 @@ int analyze_command(const std::vector<std::string>& args) {
         print_analyze_help(std::cout);
         return 0;
     }
-    const auto stores =
-        vm.count("store") ? vm["store"].as<std::vector<std::string>>() : std::vector<std::string>{};
-    if (stores.size() != 1)
-        throw core::ConfigError(stores.empty()
-                                    ? "missing the store (STORE.h5)"
-                                    : "expected one store, got " + std::to_string(stores.size()));
-    return analyze_store(stores[0], vm["json"].as<bool>(), !vm["no-write"].as<bool>(), std::cout,
+    const std::string store_path = single_positional(vm, "store", "store", "STORE.h5");
+    return analyze_store(store_path, vm["json"].as<bool>(), !vm["no-write"].as<bool>(), std::cout,
                          std::cerr);
 }
 

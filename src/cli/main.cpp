@@ -31,6 +31,7 @@ namespace {
 using hopper::cli::exit_error;
 using hopper::cli::exit_usage;
 using hopper::cli::parse_command;
+using hopper::cli::single_positional;
 
 struct Command {
     std::string_view name;
@@ -107,14 +108,7 @@ int simulate_command(const std::vector<std::string>& args) {
 
     using hopper::cli::parse_finite;
     hopper::cli::SimulateOptions opt;
-    const auto sweeps =
-        vm.count("sweep") ? vm["sweep"].as<std::vector<std::string>>() : std::vector<std::string>{};
-    if (sweeps.empty()) throw hopper::core::ConfigError("missing the sweep file (SWEEP.toml)");
-    if (sweeps.size() > 1)
-        throw hopper::core::ConfigError("expected one sweep file, got " +
-                                        std::to_string(sweeps.size()) + ": '" + sweeps[0] + "', '" +
-                                        sweeps[1] + "'" + (sweeps.size() > 2 ? ", ..." : ""));
-    opt.sweep = sweeps[0];
+    opt.sweep = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
     opt.D_cm = parse_finite("--D", required(vm, "D"));
     opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
     opt.seed = hopper::cli::parse_seed("--seed", required(vm, "seed"));

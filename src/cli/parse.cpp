@@ -1,5 +1,7 @@
 #include "cli/parse.hpp"
 
+#include "hopper/core/error.hpp"
+
 namespace po = boost::program_options;
 
 namespace hopper::cli {
@@ -19,6 +21,18 @@ po::variables_map parse_command(const std::vector<std::string>& args,
         vm);
     po::notify(vm);
     return vm;
+}
+
+std::string single_positional(const po::variables_map& vm, const char* name,
+                              const std::string& what, const std::string& placeholder) {
+    const auto values =
+        vm.count(name) ? vm[name].as<std::vector<std::string>>() : std::vector<std::string>{};
+    if (values.empty()) throw core::ConfigError("missing the " + what + " (" + placeholder + ")");
+    if (values.size() > 1)
+        throw core::ConfigError("expected one " + what + ", got " + std::to_string(values.size()) +
+                                ": '" + values[0] + "', '" + values[1] + "'" +
+                                (values.size() > 2 ? ", ..." : ""));
+    return values[0];
 }
 
 }  // namespace hopper::cli

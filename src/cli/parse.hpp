@@ -14,4 +14,10 @@ boost::program_options::variables_map parse_command(
     const std::vector<std::string>& args, boost::program_options::options_description options,
     const char* positional_name);
 
+// The single positional argument collected under `name` (e.g. the sweep file). Throws
+// core::ConfigError "missing the <what> (<placeholder>)" when there is none, and
+// "expected one <what>, got N: 'a', 'b', ..." when there are several.
+std::string single_positional(const boost::program_options::variables_map& vm, const char* name,
+                              const std::string& what, const std::string& placeholder);
+
 }  // namespace hopper::cli

@@ -72,15 +72,9 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         print_run_help(std::cout);
         return 0;
     }
-    const auto sweeps =
-        vm.count("sweep") ? vm["sweep"].as<std::vector<std::string>>() : std::vector<std::string>{};
-    if (sweeps.empty()) throw core::ConfigError("missing the sweep file (SWEEP.toml)");
-    if (sweeps.size() > 1)
-        throw core::ConfigError("expected one sweep file, got " + std::to_string(sweeps.size()) +
-                                ": '" + sweeps[0] + "', '" + sweeps[1] + "'" +
-                                (sweeps.size() > 2 ? ", ..." : ""));
+    const std::string sweep_path = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
     campaign::RunOptions opt;
-    opt.sweep = sweeps[0];
+    opt.sweep = sweep_path;
     if (vm.count("store")) {
         const std::string& s = vm["store"].as<std::string>();
         if (s.empty()) throw core::ConfigError("--store must not be empty");

@@ -161,13 +161,8 @@ int status_command(const std::vector<std::string>& args) {
         print_status_help(std::cout);
         return 0;
     }
-    const auto stores =
-        vm.count("store") ? vm["store"].as<std::vector<std::string>>() : std::vector<std::string>{};
-    if (stores.size() != 1)
-        throw core::ConfigError(stores.empty()
-                                    ? "missing the store (STORE.h5)"
-                                    : "expected one store, got " + std::to_string(stores.size()));
-    const store::StoreStatus s = store::read_status(stores[0]);
+    const store::StoreStatus s =
+        store::read_status(single_positional(vm, "store", "store", "STORE.h5"));
     if (vm["json"].as<bool>())
         std::cout << status_json(s) << '\n';
     else

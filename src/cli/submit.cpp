@@ -232,18 +232,12 @@ int submit_command(const std::vector<std::string>& args) {
         print_submit_help(std::cout);
         return 0;
     }
-    const auto sweeps =
-        vm.count("sweep") ? vm["sweep"].as<std::vector<std::string>>() : std::vector<std::string>{};
-    if (sweeps.empty()) throw ConfigError("missing the sweep file (SWEEP.toml)");
-    if (sweeps.size() > 1)
-        throw ConfigError("expected one sweep file, got " + std::to_string(sweeps.size()) + ": '" +
-                          sweeps[0] + "', '" + sweeps[1] + "'" +
-                          (sweeps.size() > 2 ? ", ..." : ""));
+    const std::string sweep_path = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
 
     // The sweep file is checked here, on the login node, not in the queue.
-    const config::SweepFile sweep = config::load_sweep(sweeps[0]);
+    const config::SweepFile sweep = config::load_sweep(sweep_path);
     if (!sweep.has_campaign)
-        throw ConfigError("'" + sweeps[0] + "' has no [campaign] section: nothing to submit");
+        throw ConfigError("'" + sweep_path + "' has no [campaign] section: nothing to submit");
     fs::path store = sweep.campaign.store;
     if (vm.count("store")) {
         const std::string& s = vm["store"].as<std::string>();
@@ -311,7 +305,7 @@ int submit_command(const std::vector<std::string>& args) {
         {"SIGNAL_LEAD", std::to_string(lead)},
         {"LOG", log.string()},
         {"CAMPAIGN", quoted("the campaign executable's path", self_executable())},
-        {"SWEEP", quoted("the sweep file's path", fs::absolute(sweeps[0]).lexically_normal())},
+        {"SWEEP", quoted("the sweep file's path", fs::absolute(sweep_path).lexically_normal())},
         {"STORE", quoted("the store's path", store)},
         {"SCRIPT", quoted("the batch script's path", script)},
         {"LAUNCHER", launcher},
