@@ -97,6 +97,18 @@ std::string scene_text(const engine::SceneParams& p) {
     l.add("protocol.sample_interval_s", q.sample_interval);
     l.add("protocol.max_overlap", q.max_overlap);
     l.add("gravity_m_s2", p.gravity);
+    // Fields: listed only when on, so stores written before fields existed stay compatible.
+    const auto& f = p.fields;
+    if (f.enabled) {
+        l.add("fields.window_s", f.window);
+        l.add("fields.cell_dlarge", f.cell);
+        l.add("fields.sample_interval_s", f.sample_interval);
+        l.add("fields.start_s", f.start);
+        l.add("fields.end_s", f.end);
+        l.add("fields.kernel", engine::to_string(f.kernel));
+        if (f.kernel == engine::FieldKernel::gaussian)
+            l.add("fields.kernel_width_dlarge", f.kernel_width);
+    }
     return l.take();
 }
 

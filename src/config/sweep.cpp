@@ -76,7 +76,7 @@ double num(const Value& v) {
 // and how it lands in SceneParams (SI). This is the single place that maps file keys to fields;
 // the defaults stay in engine/params.hpp.
 
-enum class Kind { real, integer, scheme };
+enum class Kind { real, integer, choice, boolean };
 
 struct KeyDef {
     std::string_view section;  // the file's table: "hopper", "material", ...
@@ -87,6 +87,7 @@ struct KeyDef {
     bool open_lo, open_hi;
     std::string_view unit;  // unit in the file, for messages ("" = dimensionless)
     void (*apply)(SceneParams&, const Value&);
+    std::string_view choices = {};  // Kind::choice: the allowed strings, comma-separated
 };
 
 using core::cm;
@@ -141,11 +142,11 @@ const std::array key_table = {
     KeyDef{"walls", "spacing", "walls.spacing", Kind::real, 0.1, 100, closed, closed, "wall diameters",
            [](P& p, V v) { p.hopper.wall_spacing = num(v); }},
     // [integrator]
-    KeyDef{"integrator", "scheme", "integrator.scheme", Kind::scheme, 0, 0, closed, closed, "",
+    KeyDef{"integrator", "scheme", "integrator.scheme", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
                p.integrator.scheme = std::get<std::string>(v) == "verlet" ? engine::Scheme::verlet
                                                                          : engine::Scheme::gear4;
-           }},
+           }, "gear4,verlet"},
     KeyDef{"integrator", "steps_per_collision", "integrator.steps_per_collision", Kind::real, 2, 1e5, closed, closed, "",
            [](P& p, V v) { p.integrator.steps_per_collision = num(v); }},
     KeyDef{"integrator", "skin", "integrator.skin", Kind::real, 0, 10, open, closed, "d_small",
@@ -185,11 +186,31 @@ const std::array key_table = {
            [](P& p, V v) { p.protocol.sample_interval = num(v); }},
     KeyDef{"protocol", "max_overlap", "protocol.max_overlap", Kind::real, 0, 1, open, closed, "d_small",
            [](P& p, V v) { p.protocol.max_overlap = num(v); }},
+    // [fields]: coarse-grained velocity and pressure fields of the discharge (off by default)
+    KeyDef{"fields", "enabled", "fields.enabled", Kind::boolean, 0, 0, closed, closed, "",
+           [](P& p, V v) { p.fields.enabled = std::get<std::string>(v) == "true"; }},
+    KeyDef{"fields", "window_s", "fields.window_s", Kind::real, 0, 1e4, open, closed, "s",
+           [](P& p, V v) { p.fields.window = num(v); }},
+    KeyDef{"fields", "cell_dlarge", "fields.cell_dlarge", Kind::real, 0.25, 1000, closed, closed, "d_large",
+           [](P& p, V v) { p.fields.cell = num(v); }},
+    KeyDef{"fields", "sample_interval_s", "fields.sample_interval_s", Kind::real, 0, 1e4, closed, closed, "s",
+           [](P& p, V v) { p.fields.sample_interval = num(v); }},
+    KeyDef{"fields", "start_s", "fields.start_s", Kind::real, 0, 1e6, closed, closed, "s",
+           [](P& p, V v) { p.fields.start = num(v); }},
+    KeyDef{"fields", "end_s", "fields.end_s", Kind::real, 0, 1e6, open, closed, "s",
+           [](P& p, V v) { p.fields.end = num(v); }},
+    KeyDef{"fields", "kernel", "fields.kernel", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               p.fields.kernel = std::get<std::string>(v) == "gaussian" ? engine::FieldKernel::gaussian
+                                                                       : engine::FieldKernel::cell;
+           }, "cell,gaussian"},
+    KeyDef{"fields", "kernel_width_dlarge", "fields.kernel_width_dlarge", Kind::real, 0.05, 100, closed, closed, "d_large",
+           [](P& p, V v) { p.fields.kernel_width = num(v); }},
 };
 // clang-format on
 
-constexpr std::array<std::string_view, 5> scene_sections = {"hopper", "material", "walls",
-                                                            "integrator", "protocol"};
+constexpr std::array<std::string_view, 6> scene_sections = {"hopper",     "material", "walls",
+                                                            "integrator", "protocol", "fields"};
 constexpr std::array<std::string_view, 4> campaign_keys = {"name", "store", "seed", "realizations"};
 
 bool is_scene_section(std::string_view s) {
@@ -411,15 +432,30 @@ Value Parser::read_value(const toml::node& n, const KeyDef& d) const {
                      name + " = " + got + "an integer, got " + type_name(n) +
                          (n.is_floating_point() ? " (write it without a decimal point)" : ""));
             break;
-        case Kind::scheme: {
+        case Kind::choice: {
+            std::vector<std::string> options;
+            for (std::string_view rest = d.choices; !rest.empty();) {
+                const auto comma = rest.find(',');
+                options.emplace_back(rest.substr(0, comma));
+                rest =
+                    comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+            }
+            std::string allowed;  // "a", "b"
+            for (const auto& o : options)
+                allowed += (allowed.empty() ? "\"" : ", \"") + o + "\"";
             auto s = n.as_string();
             if (!s)
-                fail(n.source(), name + " = " + got + "a string (\"gear4\" or \"verlet\"), got " +
-                                     type_name(n));
-            if (s->get() != "gear4" && s->get() != "verlet")
-                fail(n.source(), name + " = " + node_text(n) +
-                                     " is not a known scheme: allowed \"gear4\", \"verlet\"");
+                fail(n.source(),
+                     name + " = " + got + "a string (" + allowed + "), got " + type_name(n));
+            if (std::find(options.begin(), options.end(), s->get()) == options.end())
+                fail(n.source(),
+                     name + " = " + node_text(n) + " is not one of the allowed values " + allowed);
             return s->get();
+        }
+        case Kind::boolean: {
+            auto b = n.as_boolean();
+            if (!b) fail(n.source(), name + " = " + got + "true or false, got " + type_name(n));
+            return std::string(b->get() ? "true" : "false");
         }
     }
     if (v == 0.0) v = 0.0;  // no "-0" in labels and seeds
@@ -700,6 +736,14 @@ SceneParams Parser::build_scene(const std::vector<Given>& overrides,
     if (pr.empty_threshold >= s.count)
         fail(where + "protocol.empty_threshold = " + std::to_string(pr.empty_threshold) +
              " must be smaller than hopper.particles = " + std::to_string(s.count));
+    const auto& f = p.fields;
+    if (f.sample_interval > f.window)
+        fail(where + "fields.sample_interval_s = " + approx_number(f.sample_interval) +
+             " must not exceed fields.window_s = " + approx_number(f.window) +
+             " (every window needs samples)");
+    if (f.end && !(*f.end > f.start))
+        fail(where + "fields.end_s = " + approx_number(*f.end) +
+             " must exceed fields.start_s = " + approx_number(f.start));
     try {
         engine::validate_scene(p);
     } catch (const ConfigError& e) {

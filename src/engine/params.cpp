@@ -77,6 +77,16 @@ void validate_scene(const SceneParams& p) {
     require_range("protocol.jam_region_height", pr.jam_region_height, 0.0, 100.0, true);
     if (pr.t_check) require_range("protocol.t_check", *pr.t_check, 0.0, 100.0, true, " s");
     require_range("protocol.detector_interval", pr.detector_interval, 0.0, 1.0, true, " s");
+    const auto& f = p.fields;
+    if (f.enabled) {
+        require_range("fields.window", f.window, 0.0, 1e4, true, " s");
+        require_range("fields.cell", f.cell, 0.25, 1000.0, false, " d_large");
+        require_range("fields.sample_interval", f.sample_interval, 0.0, f.window, false, " s");
+        require_range("fields.start", f.start, 0.0, 1e6, false, " s");
+        if (f.end) require_range("fields.end", *f.end, f.start, 1e6, true, " s");
+        if (f.kernel == FieldKernel::gaussian)
+            require_range("fields.kernel_width", f.kernel_width, 0.05, 100.0, false, " d_large");
+    }
     require_range("protocol.shake_amplitude", pr.shake_amplitude, 0.0, 100.0, true);
     require_range("protocol.shake_period", pr.shake_period, 0.0, 100.0, true, " s");
     require_range("protocol.shake_direction", pr.shake_direction, -pi, pi, false, " rad");

@@ -8,6 +8,7 @@
 
 #include "hopper/core/error.hpp"
 #include "hopper/core/random.hpp"
+#include "hopper/engine/fields.hpp"
 #include "hopper/engine/scene.hpp"
 #include "hopper/engine/system.hpp"
 
@@ -131,6 +132,12 @@ struct Realization::Impl {
     std::int64_t k_detect = 1, k_sample = 1, k_settle = 1;
     double next_snapshot = 0.0, next_progress = 0.0;
     double ke_limit = 0.0;  // mean KE per particle beyond which we call it a blow-up
+    // Coarse-grained fields (only when p.fields.enabled; nothing allocated otherwise).
+    std::unique_ptr<FieldAccumulator> fields;
+    std::vector<double> field_pressure;  // per mobile particle, units of m g
+    std::int64_t k_field = 1;
+    double wall_top = 0.0;
+    std::vector<Vec2> outline;
     double y_region = 0.0;  // the detector region is |x| < D/2, y_region < y < 0
 
     Impl(const SceneParams& params, std::uint64_t seed, RunHooks h)
@@ -165,6 +172,8 @@ struct Realization::Impl {
         // the top of the walls to the removal floor (plus shaking); 100x that is a blow-up.
         const double drop = layout.wall_top + p.protocol.exit_depth * p.particles.d_large;
         ke_limit = 100.0 * c.m_large * p.gravity * drop;
+        wall_top = layout.wall_top;
+        outline = layout.outline;
         res.diagnostics.potential_energy_released = sys->potential_energy();
     }
 
@@ -180,6 +189,7 @@ struct Realization::Impl {
         if (flow == Flow::ended) return;
         flow = Flow::ended;
         log(kind);
+        finish_fields();
         // The rate is a property of the whole discharge: computed once, at the end.
         if (res.status != Status::failed) discharge_rate();
     }
@@ -272,6 +282,58 @@ struct Realization::Impl {
         td = flow_start = last_occupied = 0.0;
         log(Event::Kind::opened);
         sample();
+        if (p.fields.enabled) start_fields();
+    }
+
+    // ----- coarse-grained fields (fields.hpp) -------------------------------------------
+    // The grid covers the container's full width and from the removal floor to the top of
+    // the walls; the outlet (y = 0) and the axis (x = 0) lie on cell boundaries.
+    void start_fields() {
+        const FieldParams& f = p.fields;
+        FieldGrid g;
+        g.cell = f.cell * p.particles.d_large;
+        g.nx = std::max(2, 2 * int(std::ceil(0.5 * p.hopper.width / g.cell - 1e-9)));
+        g.x0 = -0.5 * g.nx * g.cell;
+        const int below = std::max(
+            1, int(std::ceil(p.protocol.exit_depth * p.particles.d_large / g.cell - 1e-9)));
+        g.y0 = -below * g.cell;
+        g.ny = below + std::max(1, int(std::ceil(wall_top / g.cell - 1e-9)));
+        g.kernel = f.kernel;
+        g.kernel_width =
+            f.kernel == FieldKernel::gaussian ? f.kernel_width * p.particles.d_large : 0.0;
+        if (double(g.nx) * double(g.ny) > 2.0e7) {
+            std::ostringstream msg;
+            msg << "the field grid would have " << g.nx << " x " << g.ny
+                << " cells; raise fields.cell_dlarge (now " << f.cell << ")";
+            throw core::ConfigError(msg.str());
+        }
+        fields = std::make_unique<FieldAccumulator>(g, f.window, f.start);
+        auto& m = fields->moments();
+        m.wall_diameter = p.hopper.wall_diameter;
+        for (const Vec2& q : outline) {
+            m.outline_x.push_back(q.x());
+            m.outline_y.push_back(q.y());
+        }
+        k_field = f.sample_interval > 0.0 ? every(f.sample_interval, c.dt) : 1;
+    }
+
+    void sample_fields() {
+        const FieldParams& f = p.fields;
+        if (td < f.start || (f.end && td >= *f.end)) return;
+        const int n = sys->mobile_count();
+        field_pressure.resize(std::size_t(n));
+        sys->normal_force_sums(field_pressure, {});
+        const auto m = sys->m();
+        for (int i = 0; i < n; ++i)
+            field_pressure[i] /= m[i] * p.gravity;
+        fields->sample(td, sys->x(), sys->y(), sys->vx(), sys->vy(), field_pressure);
+    }
+
+    void finish_fields() {
+        if (!fields) return;
+        fields->close_window();
+        res.fields = std::move(fields->moments());
+        fields.reset();
     }
 
     // ----- discharge (steps 3-7) --------------------------------------------------------
@@ -409,6 +471,8 @@ struct Realization::Impl {
                 }
                 detect();
             }
+            if (fields && flow != Flow::shaking && !ended() && step_count % k_field == 0)
+                sample_fields();
             if (step_count % k_sample == 0) {
                 check_energy();
                 sys->flush_removals();

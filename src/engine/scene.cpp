@@ -125,6 +125,7 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
         outline.emplace_back(side_x, layout.wall_top);
     }
     place_along(outline, spacing, dw, /*mirror=*/true, layout.walls);
+    layout.outline = outline;
 
     // Gate: a row across the outlet between the two innermost wall particles.
     const int n_gate = std::max(1, int(std::ceil(2 * x0 / spacing - 1e-9)));

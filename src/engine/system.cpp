@@ -5,6 +5,8 @@
 #include <limits>
 #include <span>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "hopper/core/error.hpp"
 
@@ -819,6 +821,49 @@ double System::elastic_energy() const {
         }
     }
     return e;
+}
+
+void System::normal_force_sums(std::span<double> mobile, std::span<double> wall) {
+    const std::size_t n = x_.size();
+    if ((!mobile.empty() && mobile.size() != n) || (!wall.empty() && wall.size() != wx_.size()))
+        throw std::invalid_argument("System::normal_force_sums: span sizes must be " +
+                                    std::to_string(n) + " and " + std::to_string(wx_.size()));
+    ensure_ready();
+    std::fill(mobile.begin(), mobile.end(), 0.0);
+    std::fill(wall.begin(), wall.end(), 0.0);
+    const bool want_mobile = !mobile.empty(), want_wall = !wall.empty();
+    const ContactParams& pp = config_.particle;
+    const ContactParams& pw = config_.wall;
+    for (std::size_t i = 0; i < n; ++i) {
+        double sum_i = 0.0;
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
+            const int j = pj_[k];
+            const double dx = x_[i] - x_[j], dy = y_[i] - y_[j], rs = r_[i] + r_[j];
+            const double d2 = dx * dx + dy * dy;
+            if (d2 >= rs * rs) continue;
+            const double d = std::sqrt(d2);
+            const double v_n = ((vx_[i] - vx_[j]) * dx + (vy_[i] - vy_[j]) * dy) / d;
+            const double mbar = 1.0 / (inv_m_[i] + inv_m_[j]);
+            const double f = std::abs(normal_magnitude(pp, mbar, rs - d, v_n));
+            sum_i += f;
+            if (want_mobile) mobile[j] += f;
+        }
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
+            const int j = wj_[k];
+            const double dx = x_[i] - wx_[j] - wall_offset_.x();
+            const double dy = y_[i] - wy_[j] - wall_offset_.y();
+            const double rs = r_[i] + wr_[j];
+            const double d2 = dx * dx + dy * dy;
+            if (d2 >= rs * rs) continue;
+            const double d = std::sqrt(d2);
+            const double v_n =
+                ((vx_[i] - wall_velocity_.x()) * dx + (vy_[i] - wall_velocity_.y()) * dy) / d;
+            const double f = std::abs(normal_magnitude(pw, m_[i], rs - d, v_n));
+            sum_i += f;
+            if (want_wall) wall[j] += f;
+        }
+        if (want_mobile) mobile[i] += sum_i;
+    }
 }
 
 std::vector<std::pair<int, int>> System::contacts_from_list() {

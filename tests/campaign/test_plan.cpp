@@ -46,7 +46,7 @@ std::string refusal(const store::CampaignPlan& stored, const store::CampaignPlan
 TEST(Plan, SceneTextCoversEverySceneParameter) {
     // If this fails, engine::SceneParams gained (or lost) a field: add it to scene_text() in
     // src/campaign/plan.cpp (it decides which stores a sweep may resume), then update the size.
-    EXPECT_EQ(sizeof(engine::SceneParams), 336u);
+    EXPECT_EQ(sizeof(engine::SceneParams), 408u);
     engine::SceneParams p;
     const std::string base = scene_text(p);
     EXPECT_EQ(std::count(base.begin(), base.end(), '\n'), 40);

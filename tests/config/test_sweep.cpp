@@ -118,6 +118,58 @@ TEST(ShippedCampaigns, ParseWithTheExpectedPointAndTaskCounts) {
     }
 }
 
+// Study 7 switches the fields on (published settings) for both of its points; the others do not.
+TEST(ShippedCampaigns, OnlyTheFieldsStudyHasFields) {
+    for (const auto& e : fs::directory_iterator(source_dir / "campaigns/paper")) {
+        if (e.path().extension() != ".toml") continue;
+        SCOPED_TRACE(e.path().string());
+        const SweepFile s = load_sweep(e.path());
+        const bool want = e.path().filename() == "fields.toml";
+        for (const auto& pt : s.campaign.points) {
+            const auto& f = pt.scene.fields;
+            EXPECT_EQ(f.enabled, want);
+            if (!want) continue;
+            EXPECT_DOUBLE_EQ(f.window, 0.01);
+            EXPECT_DOUBLE_EQ(f.cell, 2.0);
+            EXPECT_EQ(f.kernel, hopper::engine::FieldKernel::cell);
+            EXPECT_DOUBLE_EQ(f.start, 1.0);
+            ASSERT_TRUE(f.end.has_value());
+            EXPECT_DOUBLE_EQ(*f.end, 10.0);
+        }
+    }
+}
+
+// [fields]: types, choices and the two-key checks give clear errors.
+TEST(SweepParse, FieldKeysAreCheckedLikeEveryOther) {
+    const SweepFile s = parse(
+        "[fields]\nenabled = true\nkernel = \"gaussian\"\nkernel_width_dlarge = 1.5\n"
+        "window_s = 0.02\nsample_interval_s = 0\nstart_s = 0.5\nend_s = 2\ncell_dlarge = 1\n");
+    const auto& f = s.base.fields;
+    EXPECT_TRUE(f.enabled);
+    EXPECT_EQ(f.kernel, hopper::engine::FieldKernel::gaussian);
+    EXPECT_DOUBLE_EQ(f.kernel_width, 1.5);
+    EXPECT_DOUBLE_EQ(f.window, 0.02);
+    EXPECT_DOUBLE_EQ(f.sample_interval, 0.0);
+    EXPECT_DOUBLE_EQ(f.start, 0.5);
+    EXPECT_DOUBLE_EQ(*f.end, 2.0);
+    EXPECT_DOUBLE_EQ(f.cell, 1.0);
+    EXPECT_FALSE(parse("").base.fields.enabled);
+    EXPECT_THAT(error_of("[fields]\nenabled = 1\n"),
+                AllOf(HasSubstr("fields.enabled"), HasSubstr("true or false")));
+    EXPECT_THAT(error_of("[fields]\nkernel = \"gauss\"\n"),
+                AllOf(HasSubstr("fields.kernel"), HasSubstr("\"cell\", \"gaussian\"")));
+    EXPECT_THAT(error_of("[fields]\nkernel = 3\n"),
+                AllOf(HasSubstr("fields.kernel"), HasSubstr("a string")));
+    EXPECT_THAT(error_of("[fields]\ncell_dlarge = 0.1\n"),
+                AllOf(HasSubstr("fields.cell_dlarge"), HasSubstr("0.25")));
+    EXPECT_THAT(error_of("[fields]\nwindow_s = 0.01\nsample_interval_s = 0.02\n"),
+                AllOf(HasSubstr("fields.sample_interval_s"), HasSubstr("fields.window_s")));
+    EXPECT_THAT(error_of("[fields]\nstart_s = 2\nend_s = 1\n"),
+                AllOf(HasSubstr("fields.end_s"), HasSubstr("fields.start_s")));
+    EXPECT_THAT(error_of("[fields]\nenable = true\n"),
+                AllOf(HasSubstr("unknown key 'enable'"), HasSubstr("did you mean")));
+}
+
 TEST(ShippedCampaigns, PaperDirectoryHoldsExactlyTheEightStudies) {
     std::set<std::string> found;
     for (const auto& e : fs::directory_iterator(source_dir / "campaigns/paper"))

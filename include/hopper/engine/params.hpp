@@ -7,6 +7,7 @@
 #include <string>
 
 #include "hopper/core/units.hpp"
+#include "hopper/engine/fields.hpp"
 
 namespace hopper::engine {
 
@@ -89,6 +90,7 @@ struct SceneParams {
     MaterialParams material;
     IntegratorParams integrator;
     ProtocolParams protocol;
+    FieldParams fields;  // coarse-grained fields (off by default; fields.hpp)
     double gravity = core::standard_gravity;
 };
 

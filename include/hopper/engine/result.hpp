@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "hopper/engine/fields.hpp"
+
 namespace hopper::engine {
 
 enum class Status {
@@ -76,6 +78,8 @@ struct RealizationResult {
     std::vector<int> curve_count;
     std::vector<Event> events;
     Diagnostics diagnostics;
+    // Coarse-grained fields of the discharge; present only when SceneParams::fields.enabled.
+    std::optional<FieldMoments> fields;
 };
 
 }  // namespace hopper::engine

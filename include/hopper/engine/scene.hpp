@@ -39,6 +39,8 @@ struct SceneLayout {
     double funnel_height = 0.0;  // height where the funnel meets the side walls (m)
     double fill_top = 0.0;       // highest fill centre (m)
     double wall_top = 0.0;       // top of the side walls (m)
+    // Centre line of the right-hand wall particles from the outlet up (mirror x for the left).
+    std::vector<Vec2> outline;
 };
 
 // Half of the free width of the container at height y >= 0 (distance from the axis to the inner

@@ -104,6 +104,11 @@ class System {
     double kinetic_energy() const;
     double potential_energy() const;
     double elastic_energy() const;
+    // Sum over each particle's current contacts of |F_n| = |k_n x - gamma_n mbar v_n| (N),
+    // evaluated now from the neighbour list (not in the hot loop: costs about one force pass).
+    // `mobile` gets one entry per mobile particle (index order) and `wall` one per wall
+    // particle (wall order); either may be empty to skip it.
+    void normal_force_sums(std::span<double> mobile, std::span<double> wall);
     // Total force exerted by the particles on all walls in the last force evaluation.
     Vec2 wall_force() const { return wall_force_; }
     // Largest overlap seen since the last reset (m).
