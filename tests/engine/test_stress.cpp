@@ -60,6 +60,15 @@ void expect_sane(const RealizationResult& r, const std::string& name) {
     expect_finite(r.discharge_rate_mass, "mass rate");
     expect_finite(r.diagnostics.max_overlap_ratio, "max overlap");
     expect_finite(r.diagnostics.settled_kinetic_energy, "settled kinetic energy");
+    if (r.fields) {
+        const auto& f = *r.fields;
+        for (int k = 0; k < field_count; ++k)
+            for (int c = 0; c < f.grid.size(); ++c) {
+                expect_finite(f.mean[k][c], "field mean");
+                expect_finite(f.m2[k][c], "field M2");
+                EXPECT_GE(f.m2[k][c], 0.0);
+            }
+    }
     EXPECT_EQ(r.survival_times.size(), r.censored.size());
     EXPECT_LE(r.discharged, r.particles);
     if (r.status == Status::failed) {
@@ -97,6 +106,12 @@ TEST_P(Stress, ExtremeButLegalParametersEndSaneOrFailCleanly) {
         {"D nearly the hopper width", [](SceneParams& p) { p.hopper.outlet = 9.5 * cm; }},
         {"very few particles", [](SceneParams& p) { p.particles.count = 3; }},
         {"monodisperse", [](SceneParams& p) { p.particles.small_fraction = 1.0; }},
+        {"fields on, Gaussian, every step",
+         [](SceneParams& p) {
+             p.fields.enabled = true;
+             p.fields.kernel = FieldKernel::gaussian;
+             p.fields.sample_interval = 0.0;
+         }},
         {"delta = 2 (far too coarse)",
          [](SceneParams& p) { p.integrator.steps_per_collision = 2.0; }},
     };
