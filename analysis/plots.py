@@ -2,6 +2,7 @@
 """Figures of a campaign store (after `campaign analyze`, which `campaign run` does at the end).
 
 usage: /usr/bin/python3 analysis/plots.py STORE.h5 --out DIR
+           [--compare LABEL_A LABEL_B [--field vx|vy|speed|pressure] [--compare-out PATH]]
 
 Writes into DIR (created if needed):
   survival.png     survival-time distribution per point: Kaplan-Meier curve (log scale) with its
@@ -10,7 +11,11 @@ Writes into DIR (created if needed):
                    early/late test's p-value per outlet
   beverloo.png     mass flow rate versus outlet D with the Beverloo fits, and k versus theta
   in_hopper.png    particles in the hopper versus discharge time, per wall angle
-  fields_*.png     field maps, only when the store has a /fields group (see plot_fields)
+  fields_<label>.png  per point with fields (/analysis/fields): the mean and the fluctuation
+                   (standard deviation over windows) of vx, vy, speed and pressure, walls drawn,
+                   cells without data white
+  fields_compare.png  with --compare A B: one field (--field, default speed) of points A and B
+                   side by side on shared colour scales (e.g. the cell and the Gaussian kernel)
 and prints the files it wrote. Reads the raw realizations from /realizations and /ragged and the
 fits from /analysis (README, "Analysis"). Needs Debian's python3-h5py, -numpy and -matplotlib.
 Exit codes: 0 figures written, 2 bad arguments or a store without /analysis, 1 other errors.
@@ -269,21 +274,260 @@ def plot_in_hopper(st, out):
     return path
 
 
-def plot_fields(st, out):
-    """Hook for the fields issue: field maps (e.g. velocity, packing fraction) per point.
+# ----- coarse-grained fields (issue 7) ------------------------------------------------------------
 
-    Draws nothing and returns [] while the store has no /fields group. The fields issue fills
-    this in: read /fields, write one fields_<name>.png per map into `out`, return their paths.
-    """
-    if "fields" not in st.f:
+# name in /analysis/fields, symbol, colour map of the mean, its scale: "centred" (diverging,
+# symmetric about 0), "log" (sequential, logarithmic: the outlet jet is ~10x faster than the bulk)
+# or "linear" (sequential from 0). Fluctuations: sequential from 0.
+FIELDS = [("vx", r"$v_x$", "RdBu_r", "centred"), ("vy", r"$v_y$", "RdBu_r", "centred"),
+          ("speed", r"$|v|$", "viridis", "log"), ("pressure", "pressure", "magma", "linear")]
+FIELD_NAMES = [f[0] for f in FIELDS]
+STD_CMAP = "plasma"
+
+
+def scene_value(scene, key):
+    for line in scene.splitlines():
+        if line.startswith(key + "="):
+            try:
+                return float(line[len(key) + 1:])
+            except ValueError:
+                return None
+    return None
+
+
+class PointFields:
+    """One point's merged fields from /analysis/fields/<label> (lengths in cm)."""
+
+    def __init__(self, g, scene):
+        self.label = g.attrs["label"]
+        self.kernel = g.attrs["kernel"]
+        self.cell = float(g.attrs["cell"]) * 100
+        self.kernel_width = float(g.attrs["kernel_width"]) * 100
+        self.x0, self.y0 = float(g.attrs["x0"]) * 100, float(g.attrs["y0"]) * 100
+        self.nx, self.ny = int(g.attrs["nx"]), int(g.attrs["ny"])
+        self.realizations = int(g.attrs["realizations"])
+        self.total_windows = int(g.attrs["total_windows"])
+        self.wall = float(g.attrs["wall_diameter"]) * 100
+        self.window = scene_value(scene, "fields.window_s")
+        self.xe = self.x0 + self.cell * np.arange(self.nx + 1)  # cell edges
+        self.ye = self.y0 + self.cell * np.arange(self.ny + 1)
+        windows = g["windows"][:]
+        self.empty = windows == 0  # cells without data hold 0: masked (drawn white)
+        self.ox, self.oy = g["outline_x"][:] * 100, g["outline_y"][:] * 100
+        # Cells whose centre lies beyond the wall particles' centre line (above the outlet) are
+        # outside the container: a kernel wider than a cell reaches them from inside; mask them.
+        if len(self.ox) >= 2:
+            xc = 0.5 * (self.xe[:-1] + self.xe[1:])
+            yc = 0.5 * (self.ye[:-1] + self.ye[1:])
+            wall_x = np.interp(yc, self.oy, self.ox)
+            outside = (yc[:, None] > 0) & (np.abs(xc)[None, :] > wall_x[:, None])
+            self.empty = self.empty | outside
+        self.maps = {}
+        for name in FIELD_NAMES:
+            for stat in ("mean", "std"):
+                self.maps[stat, name] = np.ma.masked_where(self.empty, g["%s_%s" % (stat, name)][:])
+        self.units = {name: g["mean_" + name].attrs["units"] for name in FIELD_NAMES}
+        # The view: the grid's width and the walls (centre line +- half a wall particle); from the
+        # bottom of the grid to two cells above the highest cell with data (the walls above the
+        # fill show nothing).
+        reach = float(np.max(np.abs(self.ox))) + 0.5 * self.wall if len(self.ox) else 0.0
+        half = max(abs(self.xe[0]), abs(self.xe[-1]), reach)
+        rows = np.nonzero((~self.empty).any(axis=1))[0]
+        top = self.ye[rows[-1] + 1] + 2 * self.cell if len(rows) else self.ye[-1]
+        self.xlim = (-half, half)
+        self.ylim = (self.ye[0], min(top, max(self.ye[-1], float(np.max(self.oy, initial=0)))))
+
+    def aspect(self):
+        return (self.ylim[1] - self.ylim[0]) / (self.xlim[1] - self.xlim[0])
+
+    def kernel_text(self):
+        if self.kernel == "gaussian":
+            return "Gaussian kernel, width %.3g cm" % self.kernel_width
+        return "cell kernel"
+
+
+def read_fields(st):
+    """The points with fields, in /points order ([] when the analysis has none)."""
+    if "fields" not in st.a:
+        if "fields" in st.f:
+            print("plots.py: the store has fields but /analysis has none: run `campaign analyze`",
+                  file=sys.stderr)
         return []
-    return []
+    g = st.a["fields"]
+    scenes = dict(zip(st.f["points/label"].asstr()[:], st.f["points/scene"].asstr()[:]))
+    return [PointFields(g[label.replace("/", "_")], scenes.get(label, ""))
+            for label in g["labels"].asstr()[:] if label.replace("/", "_") in g]
+
+
+def colour_label(symbol, unit, stat):
+    text = "%s (%s)" % (symbol, unit)
+    return "std " + text if stat == "std" else text
+
+
+def norm_for(values, scale, stat):
+    """Colour limits from the unmasked values."""
+    data = np.ma.compressed(values)
+    data = data[np.isfinite(data)]
+    top = float(np.max(np.abs(data))) if data.size else 1.0
+    top = top if top > 0 else 1.0
+    if stat == "mean" and scale == "centred":
+        return matplotlib.colors.Normalize(-top, top)
+    if stat == "mean" and scale == "log":
+        positive = data[data > 0]
+        low = float(np.min(positive)) if positive.size else top / 100
+        return matplotlib.colors.LogNorm(max(low, top / 300), top)
+    return matplotlib.colors.Normalize(0.0, top)
+
+
+def draw_map(ax, pf, values, norm, cmap):
+    cm = plt.get_cmap(cmap).copy()
+    cm.set_bad("white")
+    cm.set_under(cm(0.0))
+    mesh = ax.pcolormesh(pf.xe, pf.ye, values, cmap=cm, norm=norm, shading="flat",
+                         rasterized=True)
+    ax.set_aspect("equal")
+    ax.set_xlim(*pf.xlim)
+    ax.set_ylim(*pf.ylim)
+    ax.set_facecolor("white")
+    ax.tick_params(labelsize=7)
+    return mesh
+
+
+def draw_walls(fig, axes_and_points):
+    """Both walls (the outline and its mirror) as lines as thick as the wall particles.
+
+    Call once the layout is final: the line width in points comes from the axes' scale."""
+    fig.canvas.draw()
+    for ax, pf in axes_and_points:
+        if len(pf.ox) == 0:
+            continue
+        x0, _ = ax.transData.transform((0.0, 0.0))
+        x1, _ = ax.transData.transform((1.0, 0.0))
+        lw = max(0.5, abs(x1 - x0) * pf.wall * 72.0 / fig.dpi)
+        for sign in (1.0, -1.0):
+            ax.plot(sign * pf.ox, pf.oy, color="0.55", lw=lw, solid_capstyle="round",
+                    solid_joinstyle="round", zorder=3)
+
+
+def colour_bar(fig, mesh, ax, label):
+    cb = fig.colorbar(mesh, ax=ax, fraction=0.08, pad=0.02, shrink=0.95)
+    norm = mesh.norm
+    if isinstance(norm, matplotlib.colors.LogNorm):
+        # plain numbers at 1-2-5 steps (a range under a decade would show one power of ten)
+        ticks = [k * 10.0 ** e for e in range(-6, 4) for k in (1, 2, 5)]
+        ticks = [t for t in ticks if norm.vmin <= t <= norm.vmax]
+        cb.ax.minorticks_off()
+        cb.set_ticks(ticks)
+        cb.set_ticklabels(["%g" % t for t in ticks])
+    cb.set_label(label, fontsize=8)
+    cb.ax.tick_params(labelsize=7)
+    return cb
+
+
+def file_part(label):
+    return "".join(c if c.isalnum() or c in "._=-" else "_" for c in label)
+
+
+def windows_text(pf):
+    return "%d windows of %g s" % (pf.total_windows, pf.window) if pf.window else \
+        "%d windows" % pf.total_windows
+
+
+def plot_fields(st, out):
+    """One figure per point with fields: for vx, vy, speed and pressure the mean map (top row)
+    and the fluctuation map (bottom row: standard deviation over windows), the hopper's walls
+    drawn, cells without data white. Returns the paths written ([] when there are no fields)."""
+    written = []
+    for pf in read_fields(st):
+        map_w = 2.2  # inches per map; each column also holds its colour bar
+        fig, axes = plt.subplots(2, 4, figsize=(4 * (map_w + 1.05),
+                                                2 * (map_w * pf.aspect() + 0.55) + 0.45),
+                                 squeeze=False, layout="constrained")
+        placed = []
+        for col, (name, symbol, cmap, scale) in enumerate(FIELDS):
+            for row, stat in enumerate(("mean", "std")):
+                ax = axes[row][col]
+                values = pf.maps[stat, name]
+                mesh = draw_map(ax, pf, values, norm_for(values, scale, stat),
+                                cmap if stat == "mean" else STD_CMAP)
+                colour_bar(fig, mesh, ax, colour_label(symbol, pf.units[name], stat))
+                ax.set_title(("mean " if stat == "mean" else "fluctuation ") + symbol, fontsize=9)
+                if row == 1:
+                    ax.set_xlabel("x (cm)", fontsize=8)
+                if col == 0:
+                    ax.set_ylabel("y (cm)", fontsize=8)
+                placed.append((ax, pf))
+        fig.suptitle("%s: %d realizations, %s, %s, cells of %.3g cm; white: no data"
+                     % (pf.label, pf.realizations, windows_text(pf), pf.kernel_text(), pf.cell),
+                     fontsize=10)
+        draw_walls(fig, placed)
+        path = os.path.join(out, "fields_%s.png" % file_part(pf.label))
+        fig.savefig(path, dpi=130)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+def plot_fields_comparison(st, labels, field, path):
+    """Two points side by side (e.g. the cell and the Gaussian kernel of one D and theta): one
+    field's mean (top row) and fluctuation (bottom row), each row on one colour scale."""
+    by_label = {pf.label: pf for pf in read_fields(st)}
+    missing = [lab for lab in labels if lab not in by_label]
+    if missing:
+        fail("no fields for point(s) %s in /analysis/fields (points with fields: %s)" % (
+            ", ".join(repr(m) for m in missing), ", ".join(repr(k) for k in by_label) or "none"))
+    name, symbol, cmap, scale = FIELDS[FIELD_NAMES.index(field)]
+    pfs = [by_label[lab] for lab in labels]
+    # one view for both (the union of their extents)
+    xlim = (min(pf.xlim[0] for pf in pfs), max(pf.xlim[1] for pf in pfs))
+    ylim = (min(pf.ylim[0] for pf in pfs), max(pf.ylim[1] for pf in pfs))
+    for pf in pfs:
+        pf.xlim, pf.ylim = xlim, ylim
+    # the settings both labels share go into the title, the others above each column
+    settings = [lab.split() for lab in labels]
+    common = [x for x in settings[0] if x in settings[1]]
+    map_w = 2.8
+    fig, axes = plt.subplots(2, 2, figsize=(2 * map_w + 1.5, 2 * (map_w * pfs[0].aspect() + 0.5)
+                                            + 0.5), squeeze=False, layout="constrained")
+    placed = []
+    for row, stat in enumerate(("mean", "std")):
+        both = np.ma.concatenate([pf.maps[stat, name].ravel() for pf in pfs])
+        norm = norm_for(both, scale, stat)
+        for col, pf in enumerate(pfs):
+            ax = axes[row][col]
+            mesh = draw_map(ax, pf, pf.maps[stat, name], norm, cmap if stat == "mean" else STD_CMAP)
+            own = " ".join(x for x in settings[col]
+                           if x not in common and not x.startswith("fields.kernel="))
+            if row == 0:
+                ax.set_title("%s\n(%s)" % (pf.kernel_text(), own) if own else pf.kernel_text(),
+                             fontsize=9)
+            if row == 1:
+                ax.set_xlabel("x (cm)", fontsize=8)
+            ax.set_ylabel("y (cm)" if col == 0 else "", fontsize=8)
+            placed.append((ax, pf))
+        colour_bar(fig, mesh, list(axes[row]),
+                   ("mean " if stat == "mean" else "fluctuation, ")
+                   + colour_label(symbol, pfs[0].units[name], stat))
+    fig.suptitle("%s\n%d + %d realizations (%s + %s); white: no data" % (
+        " ".join(common), pfs[0].realizations, pfs[1].realizations, windows_text(pfs[0]),
+        windows_text(pfs[1])), fontsize=9)
+    draw_walls(fig, placed)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Figures of a campaign store (after analyze).")
     ap.add_argument("store", help="the store (STORE.h5)")
     ap.add_argument("--out", required=True, help="directory for the PNG files")
+    ap.add_argument("--compare", nargs=2, metavar="LABEL",
+                    help="also draw one field of two points side by side (e.g. the cell and the "
+                         "Gaussian kernel of one D and theta) into OUT/fields_compare.png")
+    ap.add_argument("--field", default="speed", choices=FIELD_NAMES,
+                    help="the field --compare draws (default speed)")
+    ap.add_argument("--compare-out", metavar="PATH",
+                    help="where --compare writes its figure (default OUT/fields_compare.png)")
     args = ap.parse_args(argv)
     if not os.path.exists(args.store):
         fail("no store at '%s'" % args.store)
@@ -295,6 +539,10 @@ def main(argv=None):
     written = [plot_survival(st, args.out), plot_jam_onsets(st, args.out),
                plot_beverloo(st, args.out), plot_in_hopper(st, args.out)]
     written += plot_fields(st, args.out)
+    if args.compare:
+        written.append(plot_fields_comparison(
+            st, args.compare, args.field,
+            args.compare_out or os.path.join(args.out, "fields_compare.png")))
     for p in written:
         print(p)
     return 0

@@ -1,9 +1,14 @@
 // Engine speed benchmark (issue 2): ns per particle-step on the two standard full-size scenes,
 // per-phase breakdown, peak memory, and what each thing the engine skips is worth.
 //
-//   bench_engine [--repeats R] [--steps K] [--particles N] [--full] [--skips] [--csv FILE]
+//   bench_engine [--repeats R] [--steps K] [--particles N] [--full] [--skips] [--fields]
+//                [--csv FILE]
 //
-//   --full   also run the discharge to the end (the wall time of one whole realization)
+//   --full    also run the discharge to the end (the wall time of one whole realization)
+//   --skips   what each thing the engine skips is worth (whole mid-size realizations)
+//   --fields  the cost of the coarse-grained field observer (issue 7), whole mid-size
+//             realizations with fields off and on (cell and Gaussian kernels, sampled every
+//             1 ms and every step), run interleaved seed by seed; only this part runs
 //
 // Scenes (published values: 8750 particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, Gear):
 //   column     the settled packing before the outlet opens (gate closed), K steps per repeat;
@@ -100,11 +105,67 @@ double realization_ns(const SceneParams& p, std::uint64_t seed, double* wall = n
     return r.diagnostics.ns_per_particle_step;
 }
 
+SceneParams mid_scene() {
+    SceneParams p = full_scene(2000);
+    p.hopper.width = 25.0 * cm;
+    return p;
+}
+
+// The field observer's cost: whole mid-size realizations, the variants interleaved seed by seed
+// (so that load changes on the shared machine hit them alike); medians over seeds. Two
+// measures: the total ns per particle-step (noisy on a shared machine), and the observers' own
+// time (wall time minus the System's force, integration and neighbour timers; the field
+// sampling runs there), whose difference to "off" is the overhead proper.
+int field_overhead(int repeats) {
+    struct Variant {
+        const char* name;
+        SceneParams p;
+        std::vector<double> ns, obs;
+    };
+    std::vector<Variant> v;
+    v.push_back({"fields off", mid_scene(), {}, {}});
+    {
+        SceneParams p = mid_scene();
+        p.fields.enabled = true;
+        v.push_back({"cells 2 d_large, every 1 ms", p, {}, {}});
+        p.fields.kernel = FieldKernel::gaussian;
+        v.push_back({"Gaussian w = d_large, every 1 ms", p, {}, {}});
+        p.fields.kernel = FieldKernel::cell;
+        p.fields.sample_interval = 0.0;
+        v.push_back({"cells 2 d_large, every step", p, {}, {}});
+    }
+    std::printf(
+        "field observer overhead: 2000 particles, W = 25 cm, D = 4.5 cm, theta = 60 deg, "
+        "whole realizations, %d seeds, variants interleaved\n",
+        repeats);
+    for (int r = 0; r < repeats; ++r)
+        for (auto& x : v) {
+            const RealizationResult res = run_realization(x.p, 200 + r);
+            const auto& d = res.diagnostics;
+            x.ns.push_back(d.ns_per_particle_step);
+            x.obs.push_back(d.seconds_observers * 1e9 / d.particle_steps);
+        }
+    std::printf("  %-36s %10s %8s %12s %10s\n", "variant", "total ns", "ratio", "observers ns",
+                "overhead");
+    const double off = median(v[0].ns);
+    for (const auto& x : v) {
+        std::vector<double> diff;
+        for (int r = 0; r < repeats; ++r)
+            diff.push_back(x.obs[r] - v[0].obs[r]);
+        std::printf("  %-36s %10.2f %8.3f %12.2f %+10.2f\n", x.name, median(x.ns),
+                    median(x.ns) / off, median(x.obs), median(diff));
+    }
+    std::printf(
+        "  (overhead = median over seeds of the observers' ns per particle-step minus that of "
+        "\"fields off\")\n");
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     int repeats = 5, steps = 2000, particles = 8750;
-    bool skips = false, full_run = false;
+    bool skips = false, full_run = false, fields = false;
     std::string csv;
     for (int a = 1; a < argc; ++a) {
         const std::string arg = argv[a];
@@ -125,15 +186,19 @@ int main(int argc, char** argv) {
             skips = true;
         else if (arg == "--full")
             full_run = true;
+        else if (arg == "--fields")
+            fields = true;
         else if (arg == "--csv")
             csv = next();
         else {
             std::fprintf(stderr,
                          "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
-                         "[--skips] [--csv FILE]\n");
+                         "[--skips] [--fields] [--csv FILE]\n");
             return 2;
         }
     }
+
+    if (fields) return field_overhead(repeats);
 
     std::printf(
         "hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, "
@@ -207,11 +272,7 @@ int main(int argc, char** argv) {
             "\nwhat each skip is worth (2000 particles, whole realizations, median ns "
             "per particle-step over %d seeds):\n",
             repeats);
-        auto mid = [] {
-            SceneParams p = full_scene(2000);
-            p.hopper.width = 25.0 * cm;
-            return p;
-        };
+        auto mid = mid_scene;
         struct Variant {
             const char* name;
             SceneParams p;

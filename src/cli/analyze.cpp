@@ -101,7 +101,68 @@ std::string theta_text(double theta) {
     return json_number(theta);
 }
 
+std::string grid_text(const engine::FieldGrid& g) {
+    std::string t = std::to_string(g.nx) + " x " + std::to_string(g.ny) + " cells of " +
+                    json_number(g.cell) + " m from (" + json_number(g.x0) + ", " +
+                    json_number(g.y0) + ") m, kernel " + engine::to_string(g.kernel);
+    if (g.kernel == engine::FieldKernel::gaussian) t += " of width " + json_number(g.kernel_width);
+    return t;
+}
+
 }  // namespace
+
+PointFields merge_point_fields(const AnalysisPointInput& in) {
+    PointFields pf;
+    pf.enabled = in.scene.count("fields.kernel") > 0;
+    const bool rows_known = in.rows.size() == in.results.size();
+    const std::string unit = rows_known ? "row" : "result";
+    bool any = false;
+    std::int64_t first = -1;
+    for (std::size_t i = 0; i < in.results.size(); ++i) {
+        const auto& r = in.results[i];
+        if (!r.fields) continue;
+        any = true;
+        if (r.status == engine::Status::failed) continue;
+        const std::int64_t row = rows_known ? in.rows[i] : static_cast<std::int64_t>(i);
+        const engine::FieldMoments& m = *r.fields;
+        const auto n = static_cast<std::size_t>(std::max(m.grid.size(), 0));
+        bool sizes = m.windows.size() == n && m.weight.size() == n;
+        for (int f = 0; f < engine::field_count; ++f)
+            sizes = sizes && m.mean[f].size() == n && m.m2[f].size() == n;
+        if (!sizes)
+            throw core::StoreError("point '" + in.label + "': the fields of " + unit + " " +
+                                   std::to_string(row) + " do not match their grid (" +
+                                   grid_text(m.grid) + ")");
+        if (!pf.merged) {
+            pf.merged = m;
+            first = row;
+        } else if (!(pf.merged->grid == m.grid)) {
+            throw core::StoreError(
+                "point '" + in.label + "': the fields of " + unit + "s " + std::to_string(first) +
+                " and " + std::to_string(row) + " of /realizations have different grids (" +
+                grid_text(pf.merged->grid) + "; " + grid_text(m.grid) + "): they cannot be merged");
+        } else {
+            pf.merged->merge(m);
+        }
+        ++pf.realizations;
+    }
+    pf.enabled = pf.enabled || any;
+    if (!pf.merged) {
+        const bool all_failed =
+            std::all_of(in.results.begin(), in.results.end(),
+                        [](const auto& r) { return r.status == engine::Status::failed; });
+        pf.reason = in.results.empty() ? "no stored realizations"
+                    : all_failed       ? "no realizations without failure"
+                    : any              ? "no realization without failure has fields"
+                                       : "no stored realization has fields";
+        return pf;
+    }
+    const FieldsSummary sum = summarize_fields(*pf.merged);
+    pf.cells_with_data = sum.cells_with_data;
+    pf.max_mean_speed = sum.max_mean_speed;
+    pf.max_mean_pressure = sum.max_mean_pressure;
+    return pf;
+}
 
 Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
     Analysis a;
@@ -203,6 +264,14 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
         p.rate = stats::summarize(rate);
         p.rate_kg = stats::summarize(rate_kg);
         if (rate.empty()) p.rate.reason = p.rate_kg.reason = "no realization has a discharge rate";
+        try {
+            p.fields = merge_point_fields(in);
+        } catch (const core::StoreError& e) {
+            p.fields = PointFields{};
+            p.fields.enabled = true;
+            p.fields.error = true;
+            p.fields.reason = e.what();
+        }
 
         const auto [it, added] = group_index.emplace(group, static_cast<int>(a.groups.size()));
         if (added) {
@@ -358,6 +427,18 @@ std::string analysis_json(const Analysis& a, const std::string& store, const std
         opt_field(w, "lr_statistic", e.valid ? std::optional<double>(e.lr_statistic) : std::nullopt,
                   e.reason);
         w.end_object();
+        if (p.fields.enabled) {
+            w.key("fields");
+            if (const auto& m = p.fields.merged) {
+                w.begin_object_inline();
+                w.field("realizations", p.fields.realizations);
+                write_fields_summary(w, *m);
+                w.end_object();
+            } else {
+                w.null();
+                w.field("fields_reason", p.fields.reason);
+            }
+        }
         w.end_object();
     }
     w.end_array();
@@ -475,6 +556,99 @@ auto per_group(const Analysis& a, F f) {
 
 std::optional<double> when(bool ok, double v) {
     return ok ? std::optional<double>(v) : std::nullopt;
+}
+
+// /analysis/fields/<label>: one point's merged fields as ny x nx maps.
+store::DerivedGroup point_fields_group(const PointAnalysis& p) {
+    const engine::FieldMoments& m = *p.fields.merged;
+    const engine::FieldGrid& g = m.grid;
+    std::string name = p.label;
+    std::replace(name.begin(), name.end(), '/', '_');  // an HDF5 path component
+    store::DerivedGroup out;
+    out.name = name;
+    out.attributes = {
+        {"label", p.label},
+        {"description",
+         "fields of the point merged over its realizations that did not fail: per cell the mean "
+         "over all windows and the fluctuation std = sqrt(M2 / (n - 1)) (0 where n < 2); cells "
+         "without data (windows == 0) hold 0 in every map: mask them with windows == 0"},
+        {"kernel", engine::to_string(g.kernel)}};
+    for (int f = 0; f < engine::field_count; ++f) {
+        const auto field = static_cast<engine::Field>(f);
+        out.attributes.emplace_back("units_" + std::string(engine::field_name(field)),
+                                    std::string(engine::field_unit(field)));
+    }
+    using I = std::int64_t;
+    out.numbers = {{"cell", g.cell},
+                   {"x0", g.x0},
+                   {"y0", g.y0},
+                   {"kernel_width", g.kernel_width},
+                   {"nx", I(g.nx)},
+                   {"ny", I(g.ny)},
+                   {"realizations", I(p.fields.realizations)},
+                   {"total_windows", m.total_windows},
+                   {"samples", m.samples},
+                   {"t_first", m.t_first},
+                   {"t_last", m.t_last},
+                   {"cells_with_data", p.fields.cells_with_data},
+                   {"wall_diameter", m.wall_diameter}};
+    const std::vector<std::uint64_t> shape = {std::uint64_t(g.ny), std::uint64_t(g.nx)};
+    std::vector<double> x(std::size_t(g.nx)), y(std::size_t(g.ny));
+    for (int i = 0; i < g.nx; ++i)
+        x[std::size_t(i)] = g.x0 + (i + 0.5) * g.cell;
+    for (int j = 0; j < g.ny; ++j)
+        y[std::size_t(j)] = g.y0 + (j + 0.5) * g.cell;
+    auto& ds = out.datasets;
+    ds.push_back({"x", "m", "x of the cell centres (columns)", std::move(x)});
+    ds.push_back({"y", "m", "y of the cell centres (rows); the outlet is at y = 0", std::move(y)});
+    ds.push_back({"windows", "1",
+                  "windows in which the cell took part, over all merged realizations (n); 0: no "
+                  "data",
+                  m.windows, shape});
+    ds.push_back({"weight", "1",
+                  "summed kernel weight over all samples (cell kernel: particle-samples)", m.weight,
+                  shape});
+    for (int f = 0; f < engine::field_count; ++f) {
+        const auto field = static_cast<engine::Field>(f);
+        const std::string fname(engine::field_name(field)), unit(engine::field_unit(field));
+        std::vector<double> mean(m.mean[f].size()), sd(m.mean[f].size());
+        for (std::size_t c = 0; c < mean.size(); ++c) {
+            const bool data = m.windows[c] > 0;
+            mean[c] = data ? m.mean[f][c] : 0.0;
+            sd[c] = data ? m.fluctuation(field, int(c)) : 0.0;
+        }
+        ds.push_back({"mean_" + fname, unit,
+                      "mean over windows of " + fname + " (0 where windows == 0)", std::move(mean),
+                      shape});
+        ds.push_back({"std_" + fname, unit,
+                      "fluctuation of " + fname +
+                          ": standard deviation over windows sqrt(M2 / (n - 1)); 0 where n < 2",
+                      std::move(sd), shape});
+    }
+    ds.push_back({"outline_x", "m",
+                  "centre line of the right-hand wall particles from the outlet upwards (mirror x "
+                  "for the left wall); wall particle diameter: attribute wall_diameter",
+                  m.outline_x});
+    ds.push_back({"outline_y", "m", "y of outline_x", m.outline_y});
+    return out;
+}
+
+std::optional<store::DerivedGroup> fields_group(const Analysis& a) {
+    store::DerivedGroup out;
+    out.name = "fields";
+    out.attributes = {{"description",
+                       "coarse-grained fields per point (one group per point with fields, named "
+                       "by its label; `labels` lists them in /points order)"}};
+    std::vector<std::string> labels;
+    for (const auto& p : a.points) {
+        if (!p.fields.merged) continue;
+        labels.push_back(p.label);
+        out.groups.push_back(point_fields_group(p));
+    }
+    if (labels.empty()) return std::nullopt;
+    out.datasets.push_back(
+        {"labels", "", "labels of the points with fields, in /points order", std::move(labels)});
+    return out;
 }
 
 }  // namespace
@@ -639,6 +813,7 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
         "jam_rate", {{"description", "jam rate 1/tau versus D per group"}}, std::move(j.ds), {}};
 
     root.groups = {std::move(points), std::move(km), std::move(bev), std::move(jr)};
+    if (auto f = fields_group(a)) root.groups.push_back(std::move(*f));
     return root;
 }
 
@@ -712,6 +887,32 @@ void write_analysis(std::ostream& out, const Analysis& a) {
                                   : j.power_law.reason)
             << "; preferred: " << j.preferred << " (" << j.decision << ")\n";
     }
+    if (std::none_of(a.points.begin(), a.points.end(),
+                     [](const PointAnalysis& p) { return p.fields.enabled; }))
+        return;
+    out << "fields per point (merged over the realizations that did not fail; windows: "
+           "windows sampled; cells: with data / all; maxima of the cell means)\n";
+    std::snprintf(buf, sizeof buf, "%-*s  %12s  %8s  %11s  %15s  %18s\n", static_cast<int>(width),
+                  "point", "realizations", "windows", "cells", "max speed (m/s)",
+                  "max pressure (m g)");
+    out << buf;
+    for (const auto& p : a.points) {
+        if (!p.fields.enabled) continue;
+        const auto& f = p.fields;
+        if (!f.merged) {
+            std::snprintf(buf, sizeof buf, "%-*s  ", static_cast<int>(width), p.label.c_str());
+            out << buf << (f.error ? "error: " : "no fields: ") << f.reason << '\n';
+            continue;
+        }
+        const std::string cells =
+            std::to_string(f.cells_with_data) + "/" + std::to_string(f.merged->grid.size());
+        std::snprintf(buf, sizeof buf, "%-*s  %12d  %8lld  %11s  %15s  %18s\n",
+                      static_cast<int>(width), p.label.c_str(), f.realizations,
+                      static_cast<long long>(f.merged->total_windows), cells.c_str(),
+                      fmt("%.3g", f.max_mean_speed).c_str(),
+                      fmt("%.3g", f.max_mean_pressure).c_str());
+        out << buf;
+    }
 }
 
 namespace {
@@ -757,10 +958,14 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
         in.planned = p.realizations();
         inputs.push_back(std::move(in));
     }
+    std::int64_t row = 0;  // the journal's results in order are the rows of /realizations
     for (auto& r : store::read_journal_realizations(store)) {
         const auto it = index.find(r.label);
-        if (it == index.end()) continue;
-        inputs[it->second].results.push_back(std::move(r.result));
+        if (it != index.end()) {
+            inputs[it->second].results.push_back(std::move(r.result));
+            inputs[it->second].rows.push_back(row);
+        }
+        ++row;
     }
     const Analysis a = analyze_points(inputs);
     const std::string text = analysis_json(a, store.string(), name);
@@ -769,7 +974,15 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
     else
         write_analysis(out, a);
     out.flush();
-    if (!write) return 0;
+    // Inconsistent fields (grids that differ inside a point) are reported and make the exit
+    // code 1; everything else is printed and written.
+    int code = 0;
+    for (const auto& p : a.points)
+        if (p.fields.error) {
+            err << "campaign: fields left out: " << p.fields.reason << std::endl;
+            code = exit_error;
+        }
+    if (!write) return code;
     try {
         store::write_derived_group(store, analysis_group(a, text));
     } catch (const core::StoreError& e) {
@@ -777,7 +990,7 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
         return exit_error;
     }
     if (!json) out << "analysis written to " << store.string() << ":/analysis\n";
-    return 0;
+    return code;
 }
 
 void print_analyze_help(std::ostream& os) {

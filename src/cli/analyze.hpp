@@ -37,7 +37,27 @@ struct AnalysisPointInput {
     double D_cm = 0.0, theta_deg = 0.0;
     int planned = 0;                                 // realizations planned
     std::vector<engine::RealizationResult> results;  // stored realizations (any status)
+    // The row in /realizations of each result (same order); empty: rows unknown (messages then
+    // give the index in `results`).
+    std::vector<std::int64_t> rows;
 };
+
+// A point's coarse-grained fields (issue 7): the pieces of its realizations that did not fail,
+// merged exactly (engine::FieldMoments::merge, in row order).
+struct PointFields {
+    bool enabled = false;  // the point's scene samples fields, or a result has them
+    std::optional<engine::FieldMoments> merged;  // absent: see reason
+    std::string reason;    // why merged is absent ("no realization without failure has ...")
+    bool error = false;    // the reason is an inconsistency (grids differ inside the point)
+    int realizations = 0;  // realizations merged
+    std::int64_t cells_with_data = 0;  // nodes with at least one window
+    double max_mean_speed = 0.0;       // m/s, over the nodes with data
+    double max_mean_pressure = 0.0;    // m g
+};
+
+// Merges the fields of the realizations of `in` that did not fail. Throws core::StoreError naming
+// the point and the rows when two pieces have different grids.
+PointFields merge_point_fields(const AnalysisPointInput& in);
 
 struct PointAnalysis {
     std::string label;
@@ -56,6 +76,7 @@ struct PointAnalysis {
     stats::EarlyLateTest early_late;
     stats::SampleSummary empty_time, rate, rate_kg;
     double rho_b = 0.0, d_mean = 0.0;  // kg/m^2 (estimate), m
+    PointFields fields;
 };
 
 struct GroupAnalysis {

@@ -1,5 +1,6 @@
 #include "cli/json_writer.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -181,6 +182,35 @@ JsonWriter& JsonWriter::value(bool b) {
 JsonWriter& JsonWriter::value(double v) {
     if (!std::isfinite(v)) ++nonfinite_;
     return scalar(json_number(v));
+}
+
+FieldsSummary summarize_fields(const engine::FieldMoments& m) {
+    FieldsSummary s;
+    const auto& speed = m.mean[static_cast<int>(engine::Field::speed)];
+    const auto& pressure = m.mean[static_cast<int>(engine::Field::pressure)];
+    const std::size_t n = std::min({m.windows.size(), speed.size(), pressure.size()});
+    for (std::size_t c = 0; c < n; ++c) {
+        if (m.windows[c] <= 0) continue;
+        s.max_mean_speed = s.cells_with_data == 0 ? speed[c] : std::max(s.max_mean_speed, speed[c]);
+        s.max_mean_pressure =
+            s.cells_with_data == 0 ? pressure[c] : std::max(s.max_mean_pressure, pressure[c]);
+        ++s.cells_with_data;
+    }
+    return s;
+}
+
+void write_fields_summary(JsonWriter& w, const engine::FieldMoments& m) {
+    const engine::FieldGrid& g = m.grid;
+    w.field("kernel", engine::to_string(g.kernel));
+    if (g.kernel == engine::FieldKernel::gaussian) w.field("kernel_width_m", g.kernel_width);
+    w.field("cell_m", g.cell).field("x0_m", g.x0).field("y0_m", g.y0);
+    w.field("nx", g.nx).field("ny", g.ny);
+    w.field("samples", m.samples).field("total_windows", m.total_windows);
+    w.field("t_first", m.t_first).field("t_last", m.t_last);
+    const FieldsSummary s = summarize_fields(m);
+    w.field("cells_with_data", s.cells_with_data);
+    w.field("max_mean_speed", s.max_mean_speed);
+    w.field("max_mean_pressure", s.max_mean_pressure);
 }
 
 }  // namespace hopper::cli

@@ -23,6 +23,8 @@
 #include <string_view>
 #include <vector>
 
+#include "hopper/engine/fields.hpp"
+
 namespace hopper::cli {
 
 // `s` as a JSON string literal, quotes included.
@@ -111,5 +113,20 @@ class JsonWriter {
     bool done_ = false;
     int nonfinite_ = 0;
 };
+
+// What the compact summaries of coarse-grained fields report (`campaign simulate --json`,
+// `campaign analyze`): the nodes with at least one window, and the largest mean speed (m/s) and
+// mean pressure (m g) over them (0 when there are none).
+struct FieldsSummary {
+    std::int64_t cells_with_data = 0;
+    double max_mean_speed = 0.0;
+    double max_mean_pressure = 0.0;
+};
+FieldsSummary summarize_fields(const engine::FieldMoments& m);
+
+// The compact summary of fields as members of the open object (no per-node arrays):
+// kernel, kernel_width_m (Gaussian only), cell_m, x0_m, y0_m, nx, ny, samples, total_windows,
+// t_first, t_last, cells_with_data, max_mean_speed, max_mean_pressure.
+void write_fields_summary(JsonWriter& w, const engine::FieldMoments& m);
 
 }  // namespace hopper::cli

@@ -96,6 +96,11 @@ void write_result_json(JsonWriter& w, const RunRequest& req, const engine::Reali
         w.end_object();
     }
     w.end_array();
+    if (r.fields) {  // only when the scene samples fields: otherwise the output is unchanged
+        w.key("fields").begin_object_inline();
+        write_fields_summary(w, *r.fields);
+        w.end_object();
+    }
     w.end_object();
 }
 

@@ -8,6 +8,8 @@
 //   empty_time discharge_rate discharge_rate_kg_s steps wall_seconds ns_per_particle_step
 //   diagnostics{every Diagnostics field} discharge_curve{time, in_hopper} exit_times
 //   events[{kind, time, sim_time, in_hopper}]
+//   fields{...} (only when the scene samples fields: a one-line summary, write_fields_summary in
+//   json_writer.hpp; the per-node maps are in a campaign store, see the README)
 // Times in seconds of discharge time (shaking excluded) unless named sim_time. empty_time,
 // discharge_rate and discharge_rate_kg_s are null when the engine has no value for them.
 //

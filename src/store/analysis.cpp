@@ -39,7 +39,21 @@ void validate(const DerivedGroup& g, const std::string& where) {
                 if (!std::isfinite(x))
                     throw std::invalid_argument("derived group: non-finite value in " + here +
                                                 d.name + " (write 0 with a has_... flag)");
+        if (!d.shape.empty()) {
+            std::size_t n = 0;
+            std::visit([&](const auto& v) { n = v.size(); }, d.values);
+            std::uint64_t product = 1;
+            for (std::uint64_t k : d.shape)
+                product *= k;
+            if (std::holds_alternative<std::vector<std::string>>(d.values) || product != n)
+                throw std::invalid_argument("derived group: the shape of " + here + d.name +
+                                            " does not match its " + std::to_string(n) + " values");
+        }
     }
+    for (const auto& [name, v] : g.numbers)
+        if (const auto* x = std::get_if<double>(&v); x && !std::isfinite(*x))
+            throw std::invalid_argument("derived group: non-finite attribute " + name + " of " +
+                                        here);
     for (const auto& s : g.groups) {
         unique(s.name);
         validate(s, here);
@@ -52,7 +66,21 @@ void write_dataset(const h5::Id& loc, const DerivedDataset& d) {
     std::visit([&](const auto& v) { n = v.size(); }, d.values);
     const hsize_t chunk = std::clamp<hsize_t>(n, 1, 4096);
     h5::Id ds;
-    if (const auto* dv = std::get_if<std::vector<double>>(&d.values)) {
+    if (!d.shape.empty()) {  // fixed-size N-D array (numbers only: checked by validate())
+        const std::vector<hsize_t> dims(d.shape.begin(), d.shape.end());
+        if (const auto* dv = std::get_if<std::vector<double>>(&d.values)) {
+            ds = layout::write_array(loc, d.name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dv->data(),
+                                     dims);
+        } else if (const auto* iv = std::get_if<std::vector<std::int64_t>>(&d.values)) {
+            ds =
+                layout::write_array(loc, d.name, H5T_STD_I64LE, H5T_NATIVE_INT64, iv->data(), dims);
+        } else {
+            const auto& bv = std::get<std::vector<bool>>(d.values);
+            h5::Id type = h5::bool_type();
+            std::vector<std::int8_t> b(bv.begin(), bv.end());
+            ds = layout::write_array(loc, d.name, type.get(), type.get(), b.data(), dims);
+        }
+    } else if (const auto* dv = std::get_if<std::vector<double>>(&d.values)) {
         ds = h5::create_column(loc, d.name, H5T_IEEE_F64LE, chunk);
         h5::write_all(ds, H5T_NATIVE_DOUBLE, dv->data(), n, what);
     } else if (const auto* iv = std::get_if<std::vector<std::int64_t>>(&d.values)) {
@@ -82,6 +110,8 @@ void write_group(const h5::Id& parent, const DerivedGroup& g) {
     h5::Id grp = h5::create_group(parent, g.name);
     for (const auto& [k, v] : g.attributes)
         h5::set_attr(grp, k, v);
+    for (const auto& [k, v] : g.numbers)
+        std::visit([&, &k = k](auto x) { h5::set_attr(grp, k, x); }, v);
     for (const auto& d : g.datasets)
         write_dataset(grp, d);
     for (const auto& s : g.groups)
@@ -138,6 +168,43 @@ std::vector<std::string> derived_group_members(const fs::path& store, const std:
     }
     std::sort(out.begin(), out.end());
     return out;
+}
+
+DerivedDataset read_derived_dataset(const fs::path& store, const std::string& path) {
+    h5::quiet_errors();
+    h5::Id file = h5::open_file(store, false);
+    if (!h5::exists(file, path))
+        throw core::StoreError("'" + store.string() + "' has no dataset '/" + path + "'");
+    h5::Id ds = h5::open_dataset(file, path);
+    DerivedDataset d;
+    d.name = path.substr(path.rfind('/') == std::string::npos ? 0 : path.rfind('/') + 1);
+    d.units = h5::get_string_attr(ds, "units").value_or("");
+    d.description = h5::get_string_attr(ds, "description").value_or("");
+    const std::vector<hsize_t> dims = layout::dims_of(ds);
+    d.shape.assign(dims.begin(), dims.end());
+    hsize_t n = 1;
+    for (hsize_t k : dims)
+        n *= k;
+    h5::Id type(h5::check(H5Dget_type(ds.get()), "cannot read the type of '/" + path + "'"));
+    const H5T_class_t c = H5Tget_class(type.get());
+    const std::string what = "cannot read '/" + path + "'";
+    if (c == H5T_FLOAT) {
+        std::vector<double> v(n);
+        if (n > 0)
+            h5::check_status(
+                H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()),
+                what);
+        d.values = std::move(v);
+    } else if (c == H5T_INTEGER) {
+        std::vector<std::int64_t> v(n);
+        if (n > 0)
+            h5::check_status(
+                H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), what);
+        d.values = std::move(v);
+    } else {
+        throw core::StoreError("'/" + path + "' in '" + store.string() + "' is not numeric");
+    }
+    return d;
 }
 
 }  // namespace hopper::store

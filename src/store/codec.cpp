@@ -2,6 +2,7 @@
 
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstring>
 
 #include "hopper/core/error.hpp"
@@ -40,6 +41,12 @@ void ByteWriter::i32s(const std::vector<int>& v) {
     u32(static_cast<std::uint32_t>(v.size()));
     for (int x : v)
         i32(x);
+}
+
+void ByteWriter::i64s(const std::vector<std::int64_t>& v) {
+    u32(static_cast<std::uint32_t>(v.size()));
+    for (std::int64_t x : v)
+        i64(x);
 }
 
 void ByteWriter::bools(const std::vector<bool>& v) {
@@ -123,6 +130,13 @@ std::vector<int> ByteReader::i32s() {
     return v;
 }
 
+std::vector<std::int64_t> ByteReader::i64s() {
+    std::vector<std::int64_t> v(count(8));
+    for (std::int64_t& x : v)
+        x = i64();
+    return v;
+}
+
 std::vector<bool> ByteReader::bools() {
     const std::uint32_t n = count(1);
     std::vector<bool> v(n);
@@ -180,10 +194,115 @@ std::string hex64(std::uint64_t v) {
     return s;
 }
 
+namespace {
+
+void encode_fields(ByteWriter& w, const engine::FieldMoments& m) {
+    const engine::FieldGrid& g = m.grid;
+    w.f64(g.x0);
+    w.f64(g.y0);
+    w.f64(g.cell);
+    w.i32(g.nx);
+    w.i32(g.ny);
+    w.u8(static_cast<std::uint8_t>(g.kernel));
+    w.f64(g.kernel_width);
+    w.i64(m.total_windows);
+    w.i64(m.samples);
+    w.f64(m.t_first);
+    w.f64(m.t_last);
+    w.i64s(m.windows);
+    w.f64s(m.weight);
+    for (const auto& v : m.mean)
+        w.f64s(v);
+    for (const auto& v : m.m2)
+        w.f64s(v);
+    w.f64s(m.outline_x);
+    w.f64s(m.outline_y);
+    w.f64(m.wall_diameter);
+}
+
+// Bytes per grid node in the encoding: windows, weight, mean and M2 of every field.
+constexpr std::uint64_t field_bytes_per_node = 8 * (2 + 2 * engine::field_count);
+
+engine::FieldMoments decode_fields(ByteReader& in) {
+    auto finite = [&](double v, const char* what) {
+        if (!std::isfinite(v)) in.fail(std::string("fields: ") + what + " is not finite");
+        return v;
+    };
+    engine::FieldMoments m;
+    engine::FieldGrid& g = m.grid;
+    g.x0 = finite(in.f64(), "the grid origin x0");
+    g.y0 = finite(in.f64(), "the grid origin y0");
+    g.cell = finite(in.f64(), "the cell size");
+    if (!(g.cell > 0.0)) in.fail("fields: a cell size of " + std::to_string(g.cell) + " m");
+    g.nx = in.i32();
+    g.ny = in.i32();
+    if (g.nx <= 0 || g.ny <= 0)
+        in.fail("fields: a grid of " + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
+                " nodes");
+    const std::int64_t nodes = std::int64_t{g.nx} * std::int64_t{g.ny};
+    if (nodes > max_field_nodes)
+        in.fail("fields: a grid of " + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
+                " nodes exceeds the limit of " + std::to_string(max_field_nodes));
+    // Check the size before allocating anything: every node needs field_bytes_per_node bytes.
+    if (static_cast<std::uint64_t>(nodes) * field_bytes_per_node > in.remaining())
+        in.fail("fields: a grid of " + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
+                " nodes needs more than the " + std::to_string(in.remaining()) + " bytes left");
+    const std::uint8_t kernel = in.u8();
+    if (kernel > static_cast<std::uint8_t>(engine::FieldKernel::gaussian))
+        in.fail("fields: unknown kernel " + std::to_string(kernel));
+    g.kernel = static_cast<engine::FieldKernel>(kernel);
+    g.kernel_width = finite(in.f64(), "the kernel width");
+    if (g.kernel_width < 0.0 ||
+        (g.kernel == engine::FieldKernel::gaussian && g.kernel_width == 0.0))
+        in.fail("fields: a kernel width of " + std::to_string(g.kernel_width) + " m");
+    m.total_windows = in.i64();
+    m.samples = in.i64();
+    if (m.total_windows < 0 || m.samples < 0) in.fail("fields: negative window or sample count");
+    m.t_first = finite(in.f64(), "t_first");
+    m.t_last = finite(in.f64(), "t_last");
+    const auto per_node = [&](auto v, const std::string& name) {
+        if (v.size() != static_cast<std::size_t>(nodes))
+            in.fail("fields: " + name + " has " + std::to_string(v.size()) + " values for " +
+                    std::to_string(g.nx) + " x " + std::to_string(g.ny) + " nodes");
+        return v;
+    };
+    m.windows = per_node(in.i64s(), "windows");
+    for (std::int64_t n : m.windows)
+        if (n < 0) in.fail("fields: a negative window count");
+    m.weight = per_node(in.f64s(), "weight");
+    for (int f = 0; f < engine::field_count; ++f)
+        m.mean[f] =
+            per_node(in.f64s(), "mean_" + std::string(engine::field_name(engine::Field(f))));
+    for (int f = 0; f < engine::field_count; ++f)
+        m.m2[f] = per_node(in.f64s(), "m2_" + std::string(engine::field_name(engine::Field(f))));
+    const auto all_finite = [&](const std::vector<double>& v, const char* what) {
+        for (double x : v)
+            finite(x, what);
+    };
+    all_finite(m.weight, "a weight");
+    for (int f = 0; f < engine::field_count; ++f) {
+        all_finite(m.mean[f], "a mean");
+        all_finite(m.m2[f], "an M2 value");
+    }
+    m.outline_x = in.f64s();
+    m.outline_y = in.f64s();
+    if (m.outline_x.size() != m.outline_y.size())
+        in.fail("fields: the outline has " + std::to_string(m.outline_x.size()) + " x and " +
+                std::to_string(m.outline_y.size()) + " y values");
+    all_finite(m.outline_x, "an outline coordinate");
+    all_finite(m.outline_y, "an outline coordinate");
+    m.wall_diameter = finite(in.f64(), "the wall diameter");
+    return m;
+}
+
+}  // namespace
+
 void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
+    const std::uint16_t version =
+        r.fields ? result_codec_version : result_codec_version_without_fields;
     w.u32(result_magic);
-    w.u8(static_cast<std::uint8_t>(result_codec_version & 0xff));
-    w.u8(static_cast<std::uint8_t>(result_codec_version >> 8));
+    w.u8(static_cast<std::uint8_t>(version & 0xff));
+    w.u8(static_cast<std::uint8_t>(version >> 8));
     w.u8(static_cast<std::uint8_t>(r.status));
     w.str(r.message);
     w.u64(r.seed);
@@ -221,6 +340,7 @@ void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
           d.settled_kinetic_energy, d.potential_energy_released, d.dt, d.tau_c, d.k_n,
           d.seconds_forces, d.seconds_integration, d.seconds_neighbors, d.seconds_observers})
         w.f64(v);
+    if (r.fields) encode_fields(w, *r.fields);
 }
 
 Bytes encode_result(const engine::RealizationResult& r) {
@@ -232,9 +352,10 @@ Bytes encode_result(const engine::RealizationResult& r) {
 engine::RealizationResult decode_result(ByteReader& in) {
     if (in.u32() != result_magic) in.fail("not an encoded realization result (bad magic)");
     const std::uint16_t version = static_cast<std::uint16_t>(in.u8() | (in.u8() << 8));
-    if (version != result_codec_version)
+    if (version != result_codec_version && version != result_codec_version_without_fields)
         in.fail("result encoding version " + std::to_string(version) + " is not supported (this " +
-                "build reads version " + std::to_string(result_codec_version) + ")");
+                "build reads versions " + std::to_string(result_codec_version_without_fields) +
+                " and " + std::to_string(result_codec_version) + ")");
     engine::RealizationResult r;
     const std::uint8_t status = in.u8();
     if (status > static_cast<std::uint8_t>(engine::Status::failed))
@@ -284,6 +405,7 @@ engine::RealizationResult decode_result(ByteReader& in) {
                       &d.dt, &d.tau_c, &d.k_n, &d.seconds_forces, &d.seconds_integration,
                       &d.seconds_neighbors, &d.seconds_observers})
         *v = in.f64();
+    if (version >= 2) r.fields = decode_fields(in);
     return r;
 }
 

@@ -1,6 +1,8 @@
 #include "layout.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <variant>
 
@@ -608,7 +610,248 @@ std::string hosts_text(const std::vector<std::string>& hosts) {
     return s;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Fields: /fields/<row>, one group per realization that has fields (README, "The HDF5 file").
+
+constexpr const char* fields_group_name = "fields";
+
+std::string field_text(int f) {
+    return std::string(engine::field_name(static_cast<engine::Field>(f)));
+}
+
+std::string field_units(int f) {
+    return std::string(engine::field_unit(static_cast<engine::Field>(f)));
+}
+
+// "fields.window_s" -> its value in a point's scene text ("name=value" lines); absent when the
+// line is missing or not a finite number ("unset").
+std::optional<double> scene_value(const std::string& scene, const std::string& name) {
+    const std::string key = name + "=";
+    std::size_t at = 0;
+    while (at < scene.size()) {
+        const std::size_t end = std::min(scene.find('\n', at), scene.size());
+        if (scene.compare(at, key.size(), key) == 0) {
+            const std::string v = scene.substr(at + key.size(), end - at - key.size());
+            char* stop = nullptr;
+            const double x = std::strtod(v.c_str(), &stop);
+            if (v.empty() || stop != v.c_str() + v.size() || !std::isfinite(x)) return std::nullopt;
+            return x;
+        }
+        at = end + 1;
+    }
+    return std::nullopt;
+}
+
+void write_fields(const h5::Id& parent, const std::string& scene, int point, std::int64_t row,
+                  int realization, const engine::FieldMoments& m) {
+    const std::string name = std::to_string(row);
+    if (h5::exists(parent, name))  // left by an interrupted write: replace it
+        h5::check_status(H5Ldelete(parent.get(), name.c_str(), H5P_DEFAULT),
+                         "cannot replace /fields/" + name);
+    h5::Id g = h5::create_group(parent, name);
+    const engine::FieldGrid& grid = m.grid;
+    describe(g, "",
+             "coarse-grained fields of /realizations row " + name +
+                 ": per grid node (ny x nx, row j = y0 + (j + 1/2) cell, column i = x0 + (i + "
+                 "1/2) cell) the windows it took part in, the summed weight, and per field the "
+                 "mean and M2 (sum of squared deviations) over those windows; lengths in m, "
+                 "times in s of discharge time");
+    h5::set_attr(g, "row", static_cast<std::int64_t>(row));
+    h5::set_attr(g, "point", static_cast<std::int64_t>(point));
+    h5::set_attr(g, "realization", static_cast<std::int64_t>(realization));
+    h5::set_attr(g, "x0", fin(grid.x0));
+    h5::set_attr(g, "y0", fin(grid.y0));
+    h5::set_attr(g, "cell", fin(grid.cell));
+    h5::set_attr(g, "nx", static_cast<std::int64_t>(grid.nx));
+    h5::set_attr(g, "ny", static_cast<std::int64_t>(grid.ny));
+    h5::set_attr(g, "kernel", engine::to_string(grid.kernel));
+    h5::set_attr(g, "kernel_width", fin(grid.kernel_width));
+    for (const char* key : {"window_s", "sample_interval_s", "start_s", "end_s"})
+        if (const auto v = scene_value(scene, std::string("fields.") + key))
+            h5::set_attr(g, key, *v);
+    h5::set_attr(g, "samples", m.samples);
+    h5::set_attr(g, "total_windows", m.total_windows);
+    h5::set_attr(g, "t_first", fin(m.t_first));
+    h5::set_attr(g, "t_last", fin(m.t_last));
+    h5::set_attr(g, "wall_diameter", fin(m.wall_diameter));
+
+    const std::vector<hsize_t> dims = {static_cast<hsize_t>(std::max(grid.ny, 0)),
+                                       static_cast<hsize_t>(std::max(grid.nx, 0))};
+    const std::size_t nodes = static_cast<std::size_t>(dims[0] * dims[1]);
+    auto check_size = [&](std::size_t n, const std::string& what) {
+        if (n != nodes)
+            throw core::StoreError("the fields of row " + name + ": " + what + " has " +
+                                   std::to_string(n) + " values for " + std::to_string(grid.nx) +
+                                   " x " + std::to_string(grid.ny) + " nodes");
+    };
+    check_size(m.windows.size(), "windows");
+    h5::Id ds =
+        layout::write_array(g, "windows", H5T_STD_I64LE, H5T_NATIVE_INT64, m.windows.data(), dims);
+    describe(ds, "1", "windows in which the node took part (n)");
+    auto real = [&](const std::string& ds_name, const std::vector<double>& v,
+                    const std::string& units, const std::string& description) {
+        check_size(v.size(), ds_name);
+        std::vector<double> x(v.size());
+        std::transform(v.begin(), v.end(), x.begin(), fin);
+        h5::Id d =
+            layout::write_array(g, ds_name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, x.data(), dims);
+        describe(d, units, description);
+    };
+    real("weight", m.weight, "1",
+         "summed kernel weight over all samples (cell kernel: particle-samples in the cell)");
+    for (int f = 0; f < engine::field_count; ++f) {
+        const std::string u = field_units(f);
+        real(
+            "mean_" + field_text(f), m.mean[f], u,
+            "mean over windows of the window value of " + field_text(f) + " (0 where windows = 0)");
+        real("m2_" + field_text(f), m.m2[f], "(" + u + ")^2",
+             "sum over windows of squared deviations from the mean of " + field_text(f) +
+                 " (Welford; merge with Chan et al.)");
+    }
+    const std::size_t k = std::min(m.outline_x.size(), m.outline_y.size());
+    std::vector<double> ox(k), oy(k);
+    for (std::size_t i = 0; i < k; ++i) {
+        ox[i] = fin(m.outline_x[i]);
+        oy[i] = fin(m.outline_y[i]);
+    }
+    const std::vector<hsize_t> odims = {static_cast<hsize_t>(k)};
+    h5::Id dx =
+        layout::write_array(g, "outline_x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, ox.data(), odims);
+    describe(dx, "m",
+             "centre line of the right-hand wall particles from the outlet upwards (mirror x for "
+             "the left wall)");
+    h5::Id dy =
+        layout::write_array(g, "outline_y", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, oy.data(), odims);
+    describe(dy, "m", "y of outline_x");
+}
+
+template <class T>
+std::vector<T> read_array(const h5::Id& g, const std::string& name, hid_t mem_type,
+                          const std::vector<hsize_t>& dims, const std::string& where) {
+    h5::Id ds = h5::open_dataset(g, name);
+    if (layout::dims_of(ds) != dims)
+        throw core::StoreError(where + "/" + name + " does not have the grid's shape");
+    hsize_t n = 1;
+    for (hsize_t d : dims)
+        n *= d;
+    std::vector<T> v(static_cast<std::size_t>(n));
+    if (n > 0)
+        h5::check_status(H5Dread(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()),
+                         "cannot read " + where + "/" + name);
+    return v;
+}
+
+engine::FieldMoments read_fields(const h5::Id& g, const std::string& where) {
+    auto need_f64 = [&](const char* name) {
+        const auto v = layout::get_f64_attr(g, name);
+        if (!v) throw core::StoreError(where + " lacks the attribute " + name);
+        return *v;
+    };
+    auto need_int = [&](const char* name) {
+        const auto v = h5::get_int_attr(g, name);
+        if (!v) throw core::StoreError(where + " lacks the attribute " + name);
+        return *v;
+    };
+    engine::FieldMoments m;
+    engine::FieldGrid& grid = m.grid;
+    grid.x0 = need_f64("x0");
+    grid.y0 = need_f64("y0");
+    grid.cell = need_f64("cell");
+    const std::int64_t nx = need_int("nx"), ny = need_int("ny");
+    if (nx <= 0 || ny <= 0 || nx > max_field_nodes || ny > max_field_nodes ||
+        nx * ny > max_field_nodes)
+        throw core::StoreError(where + " has a grid of " + std::to_string(nx) + " x " +
+                               std::to_string(ny) + " nodes");
+    grid.nx = static_cast<int>(nx);
+    grid.ny = static_cast<int>(ny);
+    const auto kernel = h5::get_string_attr(g, "kernel");
+    if (!kernel || (*kernel != "cell" && *kernel != "gaussian"))
+        throw core::StoreError(where + " has no valid kernel attribute");
+    grid.kernel = *kernel == "gaussian" ? engine::FieldKernel::gaussian : engine::FieldKernel::cell;
+    grid.kernel_width = need_f64("kernel_width");
+    m.samples = need_int("samples");
+    m.total_windows = need_int("total_windows");
+    m.t_first = need_f64("t_first");
+    m.t_last = need_f64("t_last");
+    m.wall_diameter = need_f64("wall_diameter");
+    const std::vector<hsize_t> dims = {static_cast<hsize_t>(ny), static_cast<hsize_t>(nx)};
+    m.windows = read_array<std::int64_t>(g, "windows", H5T_NATIVE_INT64, dims, where);
+    m.weight = read_array<double>(g, "weight", H5T_NATIVE_DOUBLE, dims, where);
+    for (int f = 0; f < engine::field_count; ++f) {
+        m.mean[f] = read_array<double>(g, "mean_" + field_text(f), H5T_NATIVE_DOUBLE, dims, where);
+        m.m2[f] = read_array<double>(g, "m2_" + field_text(f), H5T_NATIVE_DOUBLE, dims, where);
+    }
+    auto outline = [&](const char* name) {
+        const auto d = layout::dims_of(h5::open_dataset(g, name));
+        if (d.size() != 1) throw core::StoreError(where + "/" + name + " is not 1-D");
+        return read_array<double>(g, name, H5T_NATIVE_DOUBLE, d, where);
+    };
+    m.outline_x = outline("outline_x");
+    m.outline_y = outline("outline_y");
+    if (m.outline_x.size() != m.outline_y.size())
+        throw core::StoreError(where + ": outline_x and outline_y differ in length");
+    return m;
+}
+
 }  // namespace
+
+h5::Id write_array(const h5::Id& loc, const std::string& name, hid_t file_type, hid_t mem_type,
+                   const void* data, const std::vector<hsize_t>& dims) {
+    const std::string what = "cannot write dataset '" + name + "'";
+    if (dims.empty()) throw core::StoreError(what + ": no dimensions");
+    hsize_t n = 1;
+    for (hsize_t d : dims)
+        n *= d;
+    h5::Id space(h5::check(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
+                           what + " (dataspace)"));
+    h5::Id dcpl(h5::check(H5Pcreate(H5P_DATASET_CREATE), what + " (properties)"));
+    if (n > 0) {
+        // Chunks of whole rows (the last dimension), about 1 MB each.
+        std::vector<hsize_t> chunk = dims;
+        const hsize_t row = std::max<hsize_t>(1, n / dims[0]);
+        chunk[0] = std::clamp<hsize_t>((1u << 17) / row, 1, dims[0]);
+        h5::check_status(H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()),
+                         what + " (chunk)");
+        if (H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0) {
+            h5::check_status(H5Pset_shuffle(dcpl.get()), what + " (shuffle)");
+            h5::check_status(H5Pset_deflate(dcpl.get(), 1), what + " (deflate)");
+        }
+    }
+    h5::Id ds(h5::check(H5Dcreate2(loc.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT,
+                                   dcpl.get(), H5P_DEFAULT),
+                        what));
+    if (n > 0)
+        h5::check_status(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), what);
+    return ds;
+}
+
+std::vector<hsize_t> dims_of(const h5::Id& dataset) {
+    h5::Id space(h5::check(H5Dget_space(dataset.get()), "cannot get a dataset's dataspace"));
+    const int rank =
+        h5::check(H5Sget_simple_extent_ndims(space.get()), "cannot get a dataset's rank");
+    std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+    if (rank > 0)
+        h5::check(H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr),
+                  "cannot get a dataset's dimensions");
+    return dims;
+}
+
+std::optional<double> get_f64_attr(const h5::Id& loc, const std::string& name) {
+    if (H5Aexists(loc.get(), name.c_str()) <= 0) {
+        H5Eclear2(H5E_DEFAULT);
+        return std::nullopt;
+    }
+    h5::Id a(H5Aopen(loc.get(), name.c_str(), H5P_DEFAULT));
+    if (!a) return std::nullopt;
+    h5::Id type(H5Aget_type(a.get()));
+    const H5T_class_t c = type ? H5Tget_class(type.get()) : H5T_NO_CLASS;
+    double v = 0.0;
+    if ((c != H5T_FLOAT && c != H5T_INTEGER) || H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0) {
+        H5Eclear2(H5E_DEFAULT);
+        return std::nullopt;
+    }
+    return v;
+}
 
 // ---------------------------------------------------------------------------------------------
 
@@ -617,6 +860,7 @@ struct Writer::Impl {
     h5::Id file;
     Types types;
     h5::Id g_real, g_diag, g_ragged, g_points, g_tasks, g_runs, g_failures;
+    h5::Id g_fields;  // /fields: created with the first realization that has fields
 
     struct Col {
         const ColumnDef* def;
@@ -714,6 +958,7 @@ struct Writer::Impl {
         g_tasks = h5::open_group(file, "tasks");
         g_runs = h5::open_group(file, "runs");
         g_failures = h5::open_group(file, "failures");
+        if (h5::exists(file, fields_group_name)) g_fields = h5::open_group(file, fields_group_name);
         cols.clear();
         for (const ColumnDef& d : columns())
             cols.push_back(
@@ -918,7 +1163,7 @@ void Writer::run_start(const State&, bool plan_changed) {
     impl_->runs_dirty = true;
 }
 
-void Writer::result(const State&, int point, std::int64_t row, const ResultRecord& rec,
+void Writer::result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                     const engine::RealizationResult& r) {
     Impl& m = *impl_;
     if (row != m.rows_written + m.rows_buffered)
@@ -938,6 +1183,19 @@ void Writer::result(const State&, int point, std::int64_t row, const ResultRecor
     ++m.rows_buffered;
     m.changed_tasks.emplace_back(point, rec.realization);
     m.runs_dirty = true;  // the run's stored count
+    if (r.fields) {
+        // Written at once (a realization's fields can be large; the rows are small and
+        // buffered). The file is marked not consistent from begin_run's flush on, so an
+        // interrupted write is rebuilt from the journal.
+        if (!m.g_fields) {
+            m.g_fields = h5::create_group(m.file, fields_group_name);
+            describe(m.g_fields, "",
+                     "coarse-grained velocity and pressure fields: one group per realization "
+                     "that has them, named by its row in /realizations");
+        }
+        write_fields(m.g_fields, s.plan.points.at(static_cast<std::size_t>(point)).scene, point,
+                     row, rec.realization, *r.fields);
+    }
 }
 
 void Writer::error(const State& s, int point, const ErrorRecord& rec) {
@@ -994,8 +1252,8 @@ void Writer::close(const State& s, std::uint64_t token, std::uint64_t journal_by
     m.tasks.ds.clear();
     m.runs.ds.clear();
     m.failures.ds.clear();
-    for (h5::Id* g :
-         {&m.g_real, &m.g_diag, &m.g_ragged, &m.g_points, &m.g_tasks, &m.g_runs, &m.g_failures})
+    for (h5::Id* g : {&m.g_real, &m.g_diag, &m.g_ragged, &m.g_points, &m.g_tasks, &m.g_runs,
+                      &m.g_failures, &m.g_fields})
         g->reset();
     h5::close_file(m.file);
 }
@@ -1100,6 +1358,15 @@ std::vector<StoredRealization> read_realizations(const fs::path& path) {
                                    std::to_string(labels.size()));
         o.label = labels[static_cast<std::size_t>(o.point)];
         o.record.label = o.label;
+    }
+    if (h5::exists(file, fields_group_name)) {
+        h5::Id g_fields = h5::open_group(file, fields_group_name);
+        for (std::size_t row = 0; row < rows; ++row) {
+            const std::string name = std::to_string(row);
+            if (!h5::exists(g_fields, name)) continue;
+            out[row].result.fields = read_fields(h5::open_group(g_fields, name),
+                                                 "store '" + path.string() + "': /fields/" + name);
+        }
     }
     return out;
 }

@@ -6,9 +6,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "h5.hpp"
 #include "state.hpp"
 
 namespace hopper::store::layout {
@@ -56,7 +58,17 @@ struct Inspection {
 };
 Inspection inspect(const std::filesystem::path& path);
 
-// Every stored realization, in row order. Throws core::StoreError.
+// Every stored realization, in row order, with its fields (/fields/<row>) when it has them.
+// Throws core::StoreError.
 std::vector<StoredRealization> read_realizations(const std::filesystem::path& path);
+
+// Fixed-size N-D datasets (the field maps; also used by derived groups): `dims` row-major,
+// written whole, chunked (about 1 MB per chunk) with shuffle + deflate (unchunked when empty).
+h5::Id write_array(const h5::Id& loc, const std::string& name, hid_t file_type, hid_t mem_type,
+                   const void* data, const std::vector<hsize_t>& dims);
+// The dimensions of a dataset, any rank.
+std::vector<hsize_t> dims_of(const h5::Id& dataset);
+// A double attribute, absent when missing or not numeric.
+std::optional<double> get_f64_attr(const h5::Id& loc, const std::string& name);
 
 }  // namespace hopper::store::layout

@@ -5,8 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <sstream>
+#include <utility>
 
+#include "../store/fixtures.hpp"
 #include "cli/analyze.hpp"
+#include "hopper/core/error.hpp"
+#include "hopper/engine/fields.hpp"
+#include "hopper/store/analysis.hpp"
+#include "hopper/store/store.hpp"
 
 namespace hopper::cli {
 namespace {
@@ -161,6 +169,226 @@ TEST(Analyze, GroupHasOneRowPerPointAndFlagsForMissingValues) {
     EXPECT_TRUE(saw_has_tau);
     // The Kaplan–Meier steps of point 0 (5 distinct jam times) and none for point 1.
     EXPECT_EQ(std::get<std::vector<double>>(g.groups[1].datasets[0].values).size(), 5u);
+}
+
+// ----- fields (issue 7) -------------------------------------------------------------------------
+
+engine::FieldGrid field_grid(engine::FieldKernel kernel) {
+    engine::FieldGrid g;
+    g.x0 = -0.04;
+    g.y0 = -0.02;
+    g.cell = 0.01;
+    g.nx = 8;
+    g.ny = 6;
+    g.kernel = kernel;
+    g.kernel_width = kernel == engine::FieldKernel::gaussian ? 0.008 : 0.0;
+    return g;
+}
+
+// Times and windows are binary fractions (samples every 1/1024 s, windows of 1/128 s: 8 samples),
+// so a realization fed at a later time t0 falls into windows exactly as it does alone.
+constexpr double sample_dt = 1.0 / 1024, window = 1.0 / 128;
+
+// Feeds `count` samples of a made-up discharge (30 particles, some outside the grid) at times
+// t0, t0 + sample_dt, ... into `acc`.
+void feed(engine::FieldAccumulator& acc, std::uint64_t seed, double t0, int count) {
+    std::mt19937_64 gen(seed);
+    auto u = [&](double lo, double hi) {
+        return lo + (hi - lo) * static_cast<double>(gen() >> 11) * 0x1.0p-53;
+    };
+    constexpr int n = 30;
+    std::vector<double> x(n), y(n), vx(n), vy(n), p(n);
+    for (int i = 0; i < count; ++i) {
+        for (int k = 0; k < n; ++k) {
+            x[k] = u(-0.05, 0.05);
+            y[k] = u(-0.03, 0.05);
+            vx[k] = u(-0.2, 0.2);
+            vy[k] = u(-0.8, 0.1);
+            p[k] = u(0.0, 6.0);
+        }
+        acc.sample(t0 + sample_dt * i, x, y, vx, vy, p);
+    }
+}
+
+// One realization's fields: its own accumulator, closed at the end (as the engine does).
+engine::FieldMoments piece(engine::FieldKernel kernel, std::uint64_t seed, int count) {
+    engine::FieldAccumulator acc(field_grid(kernel), window, 0.0);
+    feed(acc, seed, 0.0, count);
+    acc.close_window();
+    engine::FieldMoments m = acc.moments();
+    m.outline_x = {0.01, 0.04};
+    m.outline_y = {0.0, 0.05};
+    m.wall_diameter = 0.0077;
+    return m;
+}
+
+// Both realizations' windows fed to one accumulator (the second shifted by whole windows).
+engine::FieldMoments one_accumulator(engine::FieldKernel kernel, int count_a, int count_b) {
+    engine::FieldAccumulator acc(field_grid(kernel), window, 0.0);
+    feed(acc, 11, 0.0, count_a);
+    feed(acc, 22, 16.0, count_b);
+    acc.close_window();
+    return acc.moments();
+}
+
+void expect_near(double a, double b, const std::string& what) {
+    EXPECT_NEAR(a, b, 1e-12 * std::max(1.0, std::abs(b))) << what;
+}
+
+// Per-node windows, weight, mean and fluctuation agree to 1e-12 (relative).
+void expect_same_moments(const engine::FieldMoments& a, const engine::FieldMoments& b) {
+    ASSERT_EQ(a.grid, b.grid);
+    EXPECT_EQ(a.windows, b.windows);
+    EXPECT_EQ(a.total_windows, b.total_windows);
+    EXPECT_EQ(a.samples, b.samples);
+    for (int c = 0; c < a.grid.size(); ++c) {
+        expect_near(a.weight[c], b.weight[c], "weight " + std::to_string(c));
+        for (int f = 0; f < engine::field_count; ++f) {
+            const auto field = static_cast<engine::Field>(f);
+            expect_near(a.mean[f][c], b.mean[f][c], "mean " + std::to_string(c));
+            expect_near(a.fluctuation(field, c), b.fluctuation(field, c),
+                        "fluctuation " + std::to_string(c));
+        }
+    }
+}
+
+TEST(AnalyzeFields, MergingTwoRealizationsEqualsOneAccumulatorOverBoth) {
+    for (auto kernel : {engine::FieldKernel::cell, engine::FieldKernel::gaussian}) {
+        const auto a = piece(kernel, 11, 95), b = piece(kernel, 22, 57);
+        AnalysisPointInput in =
+            point(4.5, 60,
+                  {result(Status::complete, {1.0}), result(Status::time_limit, {1.0}),
+                   result(Status::failed, {1.0})});
+        in.results[0].fields = a;
+        in.results[1].fields = b;
+        in.results[2].fields = piece(kernel, 33, 40);  // failed: left out
+        const PointFields pf = merge_point_fields(in);
+        ASSERT_TRUE(pf.merged.has_value());
+        EXPECT_EQ(pf.realizations, 2);
+        engine::FieldMoments direct = a;
+        direct.merge(b);
+        expect_same_moments(*pf.merged, direct);
+        expect_same_moments(*pf.merged, one_accumulator(kernel, 95, 57));
+        EXPECT_GT(pf.cells_with_data, 0);
+        EXPECT_LT(pf.cells_with_data, pf.merged->grid.size() + 1);
+    }
+}
+
+TEST(AnalyzeFields, GridsThatDifferInsideAPointAreAnErrorNamingThePointAndTheRows) {
+    AnalysisPointInput in =
+        point(4.5, 60, {result(Status::complete, {1.0}), result(Status::complete, {1.0})});
+    in.results[0].fields = piece(engine::FieldKernel::cell, 1, 20);
+    in.results[1].fields = piece(engine::FieldKernel::gaussian, 2, 20);
+    in.rows = {4, 9};
+    try {
+        merge_point_fields(in);
+        FAIL() << "merged different grids";
+    } catch (const core::StoreError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("point 'D_cm=4.5 theta_deg=60'"), std::string::npos) << m;
+        EXPECT_NE(m.find("rows 4 and 9"), std::string::npos) << m;
+    }
+    const Analysis a = analyze_points({in});
+    EXPECT_TRUE(a.points[0].fields.error);
+    EXPECT_FALSE(a.points[0].fields.merged.has_value());
+    const std::string j = analysis_json(a, "s.h5", "x");
+    EXPECT_NE(j.find("\"fields\": null"), std::string::npos) << j;
+    EXPECT_NE(j.find("rows 4 and 9"), std::string::npos);
+}
+
+// A store written through the store's API: point F samples fields (two realizations with
+// fields and a failed one), point N does not.
+const store::PointPlan F = store::testing::point(
+    "D_cm=4.5 theta_deg=60", 3,
+    "particles.d_large_m=0.0077\nfields.window_s=0.01\nfields.cell_dlarge=2\n"
+    "fields.sample_interval_s=0.001\nfields.start_s=0\nfields.end_s=unset\nfields.kernel=cell\n");
+const store::PointPlan N = store::testing::point("D_cm=3 theta_deg=60", 1);
+
+std::filesystem::path fields_store(bool with_fields) {
+    using store::testing::fabricated;
+    using store::testing::result_record;
+    const auto path = store::testing::scratch() / "s.h5";
+    store::Store s(path);
+    s.begin_run(store::testing::run_record({N, F}));
+    s.append(result_record(N, 0, fabricated(0)));
+    auto r0 = fabricated(0), r1 = fabricated(2),
+         r2 = fabricated(3);  // complete, time_limit, failed
+    if (with_fields) {
+        r0.fields = piece(engine::FieldKernel::cell, 11, 95);
+        r1.fields = piece(engine::FieldKernel::cell, 22, 57);
+        r2.fields = piece(engine::FieldKernel::cell, 33, 40);
+    }
+    s.append(result_record(F, 0, r0));
+    s.append(result_record(F, 1, r1));
+    s.append(result_record(F, 2, r2));
+    s.end_run(store::RunEndRecord{store::utc_now(), "complete", 4, 1.0, 0.01});
+    return path;
+}
+
+TEST(AnalyzeFields, StoreGroupEqualsTheMergedPiecesAndOneAccumulator) {
+    const auto path = fields_store(true);
+    std::ostringstream out, err, json;
+    ASSERT_EQ(analyze_store(path, false, true, out, err), 0) << err.str();
+    EXPECT_NE(out.str().find("fields per point"), std::string::npos) << out.str();
+    const std::string group = "analysis/fields/" + F.label;
+    const auto members = store::derived_group_members(path, "analysis/fields");
+    EXPECT_EQ(members, (std::vector<std::string>{F.label, "labels"}));  // not N
+    engine::FieldMoments direct = piece(engine::FieldKernel::cell, 11, 95);
+    direct.merge(piece(engine::FieldKernel::cell, 22, 57));
+    const engine::FieldMoments single = one_accumulator(engine::FieldKernel::cell, 95, 57);
+    const auto& g = direct.grid;
+    const std::vector<std::uint64_t> shape = {std::uint64_t(g.ny), std::uint64_t(g.nx)};
+    const auto windows = store::read_derived_dataset(path, group + "/windows");
+    EXPECT_EQ(windows.shape, shape);
+    EXPECT_EQ(std::get<std::vector<std::int64_t>>(windows.values), direct.windows);
+    EXPECT_EQ(std::get<std::vector<std::int64_t>>(windows.values), single.windows);
+    const auto weight = store::read_derived_dataset(path, group + "/weight");
+    for (int f = 0; f < engine::field_count; ++f) {
+        const auto field = static_cast<engine::Field>(f);
+        const std::string name(engine::field_name(field));
+        const auto mean = store::read_derived_dataset(path, group + "/mean_" + name);
+        const auto sd = store::read_derived_dataset(path, group + "/std_" + name);
+        EXPECT_EQ(mean.shape, shape);
+        EXPECT_EQ(sd.shape, shape);
+        EXPECT_EQ(mean.units, engine::field_unit(field));
+        EXPECT_EQ(sd.units, engine::field_unit(field));
+        const auto& mv = std::get<std::vector<double>>(mean.values);
+        const auto& sv = std::get<std::vector<double>>(sd.values);
+        for (int c = 0; c < g.size(); ++c) {
+            const bool data = direct.windows[c] > 0;
+            for (const engine::FieldMoments* m : {&std::as_const(direct), &single}) {
+                expect_near(mv[c], data ? m->mean[f][c] : 0.0, "mean_" + name);
+                expect_near(sv[c], data ? m->fluctuation(field, c) : 0.0, "std_" + name);
+                expect_near(std::get<std::vector<double>>(weight.values)[c], m->weight[c],
+                            "weight");
+            }
+            if (direct.windows[c] < 2) {
+                EXPECT_EQ(sv[c], 0.0);
+            }
+        }
+    }
+    const auto x = store::read_derived_dataset(path, group + "/x");
+    EXPECT_EQ(x.units, "m");
+    EXPECT_DOUBLE_EQ(std::get<std::vector<double>>(x.values).front(), g.x0 + 0.5 * g.cell);
+    // JSON: the point with fields has a summary, the other none.
+    ASSERT_EQ(analyze_store(path, true, false, json, err), 0);
+    EXPECT_NE(json.str().find("\"fields\": {\"realizations\": 2, \"kernel\": \"cell\""),
+              std::string::npos)
+        << json.str();
+    EXPECT_EQ(json.str().find("\"fields\": {"), json.str().rfind("\"fields\": {"));
+}
+
+TEST(AnalyzeFields, StoreWithoutFieldsHasNoFieldData) {
+    const auto path = fields_store(false);
+    std::ostringstream out, err;
+    ASSERT_EQ(analyze_store(path, false, true, out, err), 0) << err.str();
+    const auto analysis = store::derived_group_members(path, "analysis");
+    EXPECT_FALSE(analysis.empty());
+    EXPECT_EQ(std::count(analysis.begin(), analysis.end(), "fields"), 0);
+    EXPECT_TRUE(store::derived_group_members(path, "fields").empty());
+    // Point F's scene asks for fields, but no realization has them: said, not invented.
+    EXPECT_NE(out.str().find("no fields: no stored realization has fields"), std::string::npos)
+        << out.str();
 }
 
 }  // namespace

@@ -211,5 +211,57 @@ TEST(JsonWriter, MisuseThrows) {
     }
 }
 
+TEST(FieldsSummary, CompactOneLineWithoutPerNodeArrays) {
+    engine::FieldGrid g;
+    g.x0 = -0.1;
+    g.y0 = -0.0308;
+    g.cell = 0.0154;
+    g.nx = 3;
+    g.ny = 2;
+    engine::FieldMoments m = engine::FieldMoments::zero(g);
+    m.windows = {0, 4, 1, 0, 2, 7};
+    const int speed = static_cast<int>(engine::Field::speed);
+    const int pressure = static_cast<int>(engine::Field::pressure);
+    m.mean[speed] = {9.0, 0.5, 0.25, 8.0, 0.75, 0.125};  // nodes without windows do not count
+    m.mean[pressure] = {99.0, 3.0, 12.5, 0.0, 1.0, 2.0};
+    m.samples = 120;
+    m.total_windows = 12;
+    m.t_first = 0.001;
+    m.t_last = 0.12;
+    const FieldsSummary s = summarize_fields(m);
+    EXPECT_EQ(s.cells_with_data, 4);
+    EXPECT_EQ(s.max_mean_speed, 0.75);
+    EXPECT_EQ(s.max_mean_pressure, 12.5);
+
+    JsonWriter w;
+    w.begin_object();
+    w.field("status", "complete");
+    w.key("fields").begin_object_inline();
+    write_fields_summary(w, m);
+    w.end_object();
+    w.end_object();
+    EXPECT_EQ(
+        w.str(),
+        "{\n  \"status\": \"complete\",\n  \"fields\": {\"kernel\": \"cell\", \"cell_m\": "
+        "0.0154, \"x0_m\": -0.1, \"y0_m\": -0.0308, \"nx\": 3, \"ny\": 2, \"samples\": 120, "
+        "\"total_windows\": 12, \"t_first\": 0.001, \"t_last\": 0.12, \"cells_with_data\": 4, "
+        "\"max_mean_speed\": 0.75, \"max_mean_pressure\": 12.5}\n}");
+
+    m.grid.kernel = engine::FieldKernel::gaussian;
+    m.grid.kernel_width = 0.0077;
+    m.windows.assign(6, 0);
+    JsonWriter g2;
+    g2.begin_object_inline();
+    write_fields_summary(g2, m);
+    g2.end_object();
+    EXPECT_NE(g2.str().find("\"kernel\": \"gaussian\", \"kernel_width_m\": 0.0077"),
+              std::string::npos)
+        << g2.str();
+    EXPECT_NE(g2.str().find("\"cells_with_data\": 0, \"max_mean_speed\": 0, "
+                            "\"max_mean_pressure\": 0"),
+              std::string::npos)
+        << g2.str();
+}
+
 }  // namespace
 }  // namespace hopper::cli

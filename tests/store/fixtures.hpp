@@ -81,6 +81,44 @@ inline engine::RealizationResult fabricated(int k, bool with_optionals = true) {
     return r;
 }
 
+// Fields with every member set, on an nx x ny grid (values derived from `k`; the Gaussian
+// kernel for odd k). Some nodes have no windows, as near the walls.
+inline engine::FieldMoments fabricated_fields(int k, int nx = 3, int ny = 2) {
+    engine::FieldGrid g;
+    g.x0 = -0.015 * nx;
+    g.y0 = -0.031;
+    g.cell = 0.0154 + 1e-4 * k;
+    g.nx = nx;
+    g.ny = ny;
+    g.kernel = k % 2 ? engine::FieldKernel::gaussian : engine::FieldKernel::cell;
+    g.kernel_width = k % 2 ? 0.0077 : 0.0;
+    engine::FieldMoments m = engine::FieldMoments::zero(g);
+    for (int c = 0; c < g.size(); ++c) {
+        const auto n = static_cast<std::int64_t>((c + k) % 5);
+        m.windows[c] = n;
+        if (n == 0) continue;
+        m.weight[c] = 10.5 * double(n) + c;
+        for (int f = 0; f < engine::field_count; ++f) {
+            m.mean[f][c] = (f == 3 ? 2.0 : -0.1) + 0.01 * f + 1.0 / (3.0 + c + k);
+            m.m2[f][c] = n > 1 ? 1e-3 * (f + 1) * (c + 1) / 7.0 : 0.0;
+        }
+    }
+    m.total_windows = 7 + k;
+    m.samples = 70 + 10 * k;
+    m.t_first = 0.001;
+    m.t_last = 0.7 + 0.01 * k;
+    m.outline_x = {0.0191, 0.0229, 0.0268, 0.1};
+    m.outline_y = {0.0, 0.0067, 0.0133, 0.2};
+    m.wall_diameter = 0.0077;
+    return m;
+}
+
+inline engine::RealizationResult with_fields(engine::RealizationResult r, int k, int nx = 3,
+                                             int ny = 2) {
+    r.fields = fabricated_fields(k, nx, ny);
+    return r;
+}
+
 inline PointPlan point(const std::string& label, int realizations, const std::string& scene = "") {
     PointPlan p;
     p.label = label;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string_view>
 
 #include "fixtures.hpp"
@@ -100,6 +101,172 @@ TEST(ResultCodec, RejectsTruncationTrailingBytesAndBadValues) {
     bad = b;
     bad[6] = 9;  // status
     EXPECT_THROW(decode_result(bad), core::StoreError);
+}
+
+void expect_same_fields(const engine::FieldMoments& a, const engine::FieldMoments& b) {
+    EXPECT_EQ(a.grid, b.grid);
+    EXPECT_EQ(a.windows, b.windows);
+    EXPECT_EQ(a.weight, b.weight);
+    EXPECT_EQ(a.mean, b.mean);
+    EXPECT_EQ(a.m2, b.m2);
+    EXPECT_EQ(a.total_windows, b.total_windows);
+    EXPECT_EQ(a.samples, b.samples);
+    EXPECT_EQ(a.t_first, b.t_first);
+    EXPECT_EQ(a.t_last, b.t_last);
+    EXPECT_EQ(a.outline_x, b.outline_x);
+    EXPECT_EQ(a.outline_y, b.outline_y);
+    EXPECT_EQ(a.wall_diameter, b.wall_diameter);
+}
+
+TEST(ResultCodec, RoundTripsFields) {
+    for (int k = 0; k < 4; ++k) {
+        const auto r = testing::with_fields(testing::fabricated(k, k % 2 == 0), k, 3 + k, 2 + k);
+        const Bytes b = encode_result(r);
+        EXPECT_EQ(b[4], 2) << "a result with fields is encoding version 2";
+        const auto back = decode_result(b);
+        ASSERT_TRUE(back.fields.has_value());
+        expect_same_fields(*back.fields, *r.fields);
+        expect_same(back, r);
+    }
+}
+
+// fabricated(3, false) as encoded by the version-1 encoder, before fields existed (the bytes of a
+// result record in a store written then).
+constexpr std::string_view version1_record =
+    "485252310100030c0000006d657373616765203320c3a9eb03000000000000530000002b00000001000000fca9f1d2"
+    "4d"
+    "62c03f0100000001000000000000000000000000000000000000000000000000000000000000000000000000000000"
+    "00"
+    "0000000000004900000008000000e0413adc11c5293eec5bc2aee17a843f3338387be17a943f70420f1f52b89e3f57"
+    "26"
+    "7361e17aa43f76ab5eb39999a93f94304a0552b8ae3fdada9a2b85ebb13f0700000000000000000000007b14ae47e1"
+    "7a"
+    "843f7b14ae47e17a943fb81e85eb51b89e3f7b14ae47e17aa43f9a9999999999a93fb81e85eb51b8ae3f0700000064"
+    "00"
+    "0000630000006200000061000000600000005f0000005e00000004000000000000000000000000333333333333d33f"
+    "50"
+    "000000010000000000000000333333333333d33f50000000029a9999999999d93f000000000000e83f2f0000000600"
+    "00"
+    "00000000f83f00000000000000400000000043e201000000000029090000000000004d000000000000003333333333"
+    "33"
+    "d33f343333333333c33f0000000000000e4000000000006054408d28ed0dbe30893f95d626e80b2e113e7b14ae47e1"
+    "7a"
+    "943f8dedb5a0f7c6f03e2d431cebe2364a3f0000000000f591409a9999999999d93f9a9999999999b93f9a99999999"
+    "99"
+    "a93f7b14ae47e17a843f";
+
+Bytes from_hex(std::string_view hex) {
+    Bytes b;
+    for (std::size_t i = 0; i + 1 < hex.size(); i += 2)
+        b.push_back(
+            static_cast<std::uint8_t>(std::stoul(std::string(hex.substr(i, 2)), nullptr, 16)));
+    return b;
+}
+
+TEST(ResultCodec, Version1RecordsStillDecodeAndResultsWithoutFieldsAreStillVersion1) {
+    const Bytes old = from_hex(version1_record);
+    ASSERT_EQ(old.size(), 490u);
+    const auto r = decode_result(old, "old record");
+    EXPECT_EQ(r.status, engine::Status::failed);
+    EXPECT_EQ(r.message, "message 3 \xc3\xa9");
+    EXPECT_EQ(r.seed, 1003u);
+    EXPECT_EQ(r.particles, 83);
+    EXPECT_EQ(r.exit_times.size(), 8u);
+    EXPECT_EQ(r.events.size(), 4u);
+    EXPECT_FALSE(r.empty_time.has_value());
+    EXPECT_EQ(r.diagnostics.k_n, 1149.25);
+    EXPECT_FALSE(r.fields.has_value());
+    expect_same(r, testing::fabricated(3, false));
+    // Without fields the encoding is unchanged byte for byte (version 1): stores without fields
+    // look exactly as before, and older builds read them.
+    EXPECT_EQ(encode_result(r), old);
+}
+
+// The byte offset of the fields block in an encoding (the version-1 part comes first).
+std::size_t fields_offset(const engine::RealizationResult& r) {
+    auto without = r;
+    without.fields.reset();
+    return encode_result(without).size();
+}
+
+std::string decode_error_of(const Bytes& b) {
+    try {
+        decode_result(b, "record");
+    } catch (const core::StoreError& e) {
+        return e.what();
+    }
+    return "(decoded)";
+}
+
+template <class T>
+void put(Bytes& b, std::size_t at, T v) {
+    for (std::size_t i = 0; i < sizeof v; ++i)
+        b[at + i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(v) >> (8 * i));
+}
+
+TEST(ResultCodec, DamagedFieldsAreCleanErrors) {
+    const auto r = testing::with_fields(testing::fabricated(2), 1, 4, 3);  // 12 nodes
+    const Bytes good = encode_result(r);
+    const std::size_t at = fields_offset(r);
+    // The fields block: x0 y0 cell (f64) nx ny (i32) kernel (u8) kernel_width total_windows
+    // samples t_first t_last (8 bytes each), then the windows count.
+    const std::size_t nx = at + 24, ny = at + 28, kernel = at + 32, windows = at + 73;
+    auto with = [&](auto edit) {
+        Bytes b = good;
+        edit(b);
+        return decode_error_of(b);
+    };
+    auto has = [](const std::string& s, const char* part) {
+        return s.find(part) != std::string::npos;
+    };
+    // Absurd grids fail before anything is allocated.
+    std::string e = with([&](Bytes& b) {
+        put<std::int32_t>(b, nx, 1 << 30);
+        put<std::int32_t>(b, ny, 1 << 30);
+    });
+    EXPECT_TRUE(has(e, "exceeds the limit")) << e;
+    e = with([&](Bytes& b) { put<std::int32_t>(b, nx, 2000); });
+    EXPECT_TRUE(has(e, "bytes left")) << e;
+    e = with([&](Bytes& b) { put<std::int32_t>(b, ny, -3); });
+    EXPECT_TRUE(has(e, "a grid of 4 x -3 nodes")) << e;
+    // Per-node arrays whose length is not nx * ny.
+    e = with([&](Bytes& b) { put<std::int32_t>(b, ny, 2); });
+    EXPECT_TRUE(has(e, "windows has 12 values for 4 x 2 nodes")) << e;
+    e = with([&](Bytes& b) { put<std::uint32_t>(b, windows, 11); });
+    EXPECT_TRUE(has(e, "fields")) << e;
+    e = with([&](Bytes& b) { b[kernel] = 7; });
+    EXPECT_TRUE(has(e, "unknown kernel 7")) << e;
+    e = with([&](Bytes& b) { put<std::int64_t>(b, windows + 4, -1); });
+    EXPECT_TRUE(has(e, "negative window count")) << e;
+    // Non-finite numbers anywhere in the fields.
+    auto nonfinite = [&](auto set) {
+        auto bad = r;
+        set(*bad.fields);
+        return decode_error_of(encode_result(bad));
+    };
+    const double nan = std::nan(""), inf = std::numeric_limits<double>::infinity();
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.mean[1][5] = nan; }), "a mean is not finite"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.m2[3][0] = inf; }), "M2 value is not finite"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.weight[2] = -inf; }), "weight is not finite"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.grid.cell = nan; }), "cell size is not finite"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.outline_y[1] = nan; }), "outline"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.t_last = inf; }), "t_last is not finite"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.outline_y.pop_back(); }), "the outline has"));
+    EXPECT_TRUE(has(nonfinite([&](auto& m) { m.weight.pop_back(); }), "weight has 11 values"));
+    // Truncated anywhere: an error, never a crash.
+    for (std::size_t n = at; n < good.size(); ++n)
+        EXPECT_THROW(decode_result(std::span(good.data(), n)), core::StoreError) << n;
+    // Every byte of the fields block replaced by a few values: decodes or a StoreError, nothing
+    // else (no crash, no other exception, no huge allocation).
+    for (std::size_t i = at; i < good.size(); ++i)
+        for (std::uint8_t v : {0x00, 0x01, 0x7f, 0x80, 0xff}) {
+            Bytes b = good;
+            b[i] = v;
+            try {
+                decode_result(b);
+            } catch (const core::StoreError&) {
+            }
+        }
 }
 
 TEST(ResultCodec, PhysicsDigestIgnoresOnlyWallClock) {

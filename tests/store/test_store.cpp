@@ -14,6 +14,7 @@
 
 #include "fixtures.hpp"
 #include "hopper/core/error.hpp"
+#include "hopper/store/analysis.hpp"
 #include "hopper/store/store.hpp"
 
 namespace hopper::store {
@@ -83,6 +84,72 @@ TEST(Store, EveryFieldSurvivesJournalAndHdf5) {
     EXPECT_EQ(from_h5[2].record.task_seconds, 0.5);
     EXPECT_EQ(from_h5[1].record.finished_unix, 1.7e9 + 1);
     EXPECT_EQ(from_h5[0].record.rank, 1);
+}
+
+// Fields: a point whose scene switches them on (the HDF5 view copies its window settings).
+const PointPlan F = point("D_cm=4.5 theta_deg=60 fields.kernel=gaussian", 3,
+                          "hopper.width_m=0.2\nfields.window_s=0.02\nfields.cell_dlarge=2\n"
+                          "fields.sample_interval_s=0.001\nfields.start_s=0.5\nfields.end_s=unset\n"
+                          "fields.kernel=gaussian\n");
+
+fs::path store_with_fields(const fs::path& dir) {
+    const fs::path p = dir / "s.h5";
+    Store s(p);
+    s.begin_run(run_record({A, F}));
+    s.append(result_record(F, 0, testing::with_fields(fabricated(0), 1, 5, 4)));  // row 0
+    s.append(result_record(A, 0, fabricated(1)));                                 // row 1
+    s.append(result_record(F, 2, testing::with_fields(fabricated(2), 3, 5, 4)));  // row 2
+    s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
+    return p;
+}
+
+TEST(Store, FieldsSurviveJournalHdf5AndRebuild) {
+    const fs::path p = store_with_fields(scratch());
+    const auto from_h5 = read_realizations(p);
+    ASSERT_EQ(from_h5.size(), 3u);
+    EXPECT_EQ(contents(from_h5), contents(read_journal_realizations(p)));  // fields included
+    ASSERT_TRUE(from_h5[0].result.fields.has_value());
+    EXPECT_FALSE(from_h5[1].result.fields.has_value());
+    EXPECT_EQ(encode_result(from_h5[2].result),
+              result_record(F, 2, testing::with_fields(fabricated(2), 3, 5, 4)).result);
+    // One group per realization with fields, named by its row.
+    EXPECT_EQ(derived_group_members(p, "fields"), (std::vector<std::string>{"0", "2"}));
+    EXPECT_EQ(derived_group_members(p, "fields/0").size(), 12u);  // 10 maps + the outline
+    const DerivedDataset mean = read_derived_dataset(p, "fields/2/mean_vy");
+    EXPECT_EQ(mean.shape, (std::vector<std::uint64_t>{4, 5}));  // ny x nx
+    EXPECT_EQ(mean.units, "m/s");
+    EXPECT_EQ(std::get<std::vector<double>>(mean.values), from_h5[2].result.fields->mean[1]);
+    const DerivedDataset n = read_derived_dataset(p, "fields/0/windows");
+    EXPECT_EQ(std::get<std::vector<std::int64_t>>(n.values), from_h5[0].result.fields->windows);
+    EXPECT_EQ(read_derived_dataset(p, "fields/0/m2_pressure").units, "(m g)^2");
+    // Rebuilt from the journal: the same view.
+    fs::remove(p);
+    {
+        Store s(p);
+        s.begin_run(run_record({A, F}));
+        s.append(result_record(F, 1, fabricated(4)));  // row 3, without fields
+        s.end_run(RunEndRecord{utc_now(), "complete", 1, 1.0, 0.01});
+    }
+    EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
+    EXPECT_EQ(derived_group_members(p, "fields"), (std::vector<std::string>{"0", "2"}));
+    // Appending to the file in step (no rebuild) adds to the existing group.
+    {
+        const PointPlan F4 = point(F.label, 4, F.scene);
+        Store s(p);
+        EXPECT_TRUE(s.notes().empty());
+        s.begin_run(run_record({A, F4}));
+        s.append(result_record(F4, 3, testing::with_fields(fabricated(5), 1, 5, 4)));  // row 4
+        s.end_run(RunEndRecord{utc_now(), "complete", 1, 1.0, 0.01});
+    }
+    EXPECT_EQ(derived_group_members(p, "fields"), (std::vector<std::string>{"0", "2", "4"}));
+    EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
+}
+
+TEST(Store, WithoutFieldsThereIsNoFieldsGroup) {
+    const fs::path p = finished_store(scratch());
+    EXPECT_TRUE(derived_group_members(p, "fields").empty());
+    for (const auto& r : read_journal_realizations(p))
+        EXPECT_FALSE(r.result.fields.has_value());
 }
 
 TEST(Store, StatusCountsDoneFailedErrorsAndPending) {

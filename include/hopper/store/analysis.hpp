@@ -9,9 +9,10 @@
 // in the middle leaves a file that the next `campaign run` rebuilds (dropping the partial group)
 // rather than one that looks in step.
 //
-// Datasets follow the store's conventions (README, "The HDF5 file"): 1-D, chunked, with
+// Datasets follow the store's conventions (README, "The HDF5 file"): chunked, compressed, with
 // `description` and `units` attributes; no NaN or infinity (the caller writes 0 with a has_...
-// flag, or leaves the value out, and states why).
+// flag, or leaves the value out, and states why). They are 1-D unless `shape` is given (e.g. the
+// ny x nx field maps of /analysis/fields).
 
 #include <cstdint>
 #include <filesystem>
@@ -30,6 +31,9 @@ struct DerivedDataset {
     std::variant<std::vector<double>, std::vector<std::int64_t>, std::vector<bool>,
                  std::vector<std::string>>
         values;
+    // Empty: 1-D (extendible). Otherwise the dimensions, row-major; their product must be the
+    // number of values (not for strings).
+    std::vector<std::uint64_t> shape = {};
 };
 
 struct DerivedGroup {
@@ -37,6 +41,8 @@ struct DerivedGroup {
     std::vector<std::pair<std::string, std::string>> attributes;  // string attributes
     std::vector<DerivedDataset> datasets;
     std::vector<DerivedGroup> groups;  // nested groups
+    // Numeric attributes (finite), written as HDF5 doubles or 64-bit integers.
+    std::vector<std::pair<std::string, std::variant<double, std::int64_t>>> numbers = {};
 };
 
 // Writes `group` as /<group.name> of the store file, replacing any group (or dataset) of that name,
@@ -51,5 +57,10 @@ void write_derived_group(const std::filesystem::path& store, const DerivedGroup&
 // Throws core::StoreError when the file cannot be read.
 std::vector<std::string> derived_group_members(const std::filesystem::path& store,
                                                const std::string& name);
+
+// A numeric dataset of a store file read back, e.g. "analysis/fields/<label>/mean_vx": its
+// values (doubles or 64-bit integers, as written), `shape` its dimensions and `units` and
+// `description` its attributes. Throws core::StoreError when it is missing or not numeric.
+DerivedDataset read_derived_dataset(const std::filesystem::path& store, const std::string& path);
 
 }  // namespace hopper::store

@@ -30,6 +30,7 @@ class ByteWriter {
     void raw(std::span<const std::uint8_t> b) { out_.insert(out_.end(), b.begin(), b.end()); }
     void f64s(const std::vector<double>& v);
     void i32s(const std::vector<int>& v);
+    void i64s(const std::vector<std::int64_t>& v);
     void bools(const std::vector<bool>& v);
 
     const Bytes& bytes() const { return out_; }
@@ -55,6 +56,7 @@ class ByteReader {
     std::span<const std::uint8_t> raw(std::size_t n);
     std::vector<double> f64s();
     std::vector<int> i32s();
+    std::vector<std::int64_t> i64s();
     std::vector<bool> bools();
 
     std::size_t remaining() const { return in_.size() - pos_; }
@@ -79,9 +81,21 @@ std::uint32_t crc32c(std::span<const std::uint8_t> data, std::uint32_t crc = 0);
 std::uint64_t fnv1a64(std::string_view text, std::uint64_t h = 0xcbf29ce484222325ull);
 std::string hex64(std::uint64_t v);  // 16 lowercase hex digits
 
-// The encoding of a RealizationResult. Version 1 layout: u32 magic "HRR1", u16 version, then
-// every field of RealizationResult in declaration order (Diagnostics last).
-inline constexpr std::uint16_t result_codec_version = 1;
+// The encoding of a RealizationResult: u32 magic "HRR1", u16 version, then every member of
+// RealizationResult in declaration order (Diagnostics, then the fields).
+//   Version 1: no fields. A result without fields is still written as version 1, byte for byte
+//              as before fields existed, so stores without fields are unchanged and readable by
+//              older builds.
+//   Version 2: version 1 followed by the fields (engine::FieldMoments): the grid (x0, y0, cell,
+//              nx, ny, kernel, kernel_width), total_windows, samples, t_first, t_last, the
+//              per-node arrays (windows, weight, mean and M2 of each field; nx * ny each), the
+//              outline (x, y) and the wall diameter. Written only when fields are present.
+// Both versions are read. Decoding the fields checks them before allocating: nx, ny positive,
+// nx * ny at most max_field_nodes and within the bytes left, every per-node array nx * ny long,
+// every number finite, counts non-negative; otherwise core::StoreError.
+inline constexpr std::uint16_t result_codec_version = 2;
+inline constexpr std::uint16_t result_codec_version_without_fields = 1;
+inline constexpr std::int64_t max_field_nodes = 20'000'000;  // the engine refuses larger grids
 Bytes encode_result(const engine::RealizationResult& r);
 void encode_result(ByteWriter& w, const engine::RealizationResult& r);
 engine::RealizationResult decode_result(std::span<const std::uint8_t> bytes,
