@@ -517,8 +517,10 @@ void System::check_overlap(double step_max_overlap) {
         std::ostringstream msg;
         msg << "overlap of " << step_max_overlap << " m exceeds the allowed " << config_.max_overlap
             << " m at t = " << time_ << " s (dt = " << config_.dt
-            << " s): the time step is too large for this stiffness and impact speed; use a "
-               "smaller time step";
+            << " s): either the time step is too large for this stiffness and impact speed "
+               "(use a smaller time step: raise integrator.steps_per_collision) or the contacts "
+               "are too soft for the load of a tall packing (use stiffer contacts: a shorter "
+               "material.collision_time_s, or allow more with protocol.max_overlap)";
         throw core::SimulationError(msg.str());
     }
 }
