@@ -61,7 +61,7 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed([](auto& q) { q.particles.density = 999; }));
     EXPECT_TRUE(changed([](auto& q) { q.material.wall.mu = 0.1; }));
     EXPECT_TRUE(changed([](auto& q) { q.material.collision_time = 8e-4; }));
-    EXPECT_TRUE(changed([](auto& q) { q.integrator.scheme = engine::Scheme::verlet; }));
+    EXPECT_TRUE(changed([](auto& q) { q.integrator.scheme = engine::Scheme::gear4; }));
     EXPECT_TRUE(changed([](auto& q) { q.protocol.t_check = 0.05; }));
     EXPECT_TRUE(changed([](auto& q) { q.protocol.empty_threshold = 3; }));
     EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));

@@ -28,6 +28,10 @@ SceneParams small_hopper() {
     p.hopper.theta = 45.0 * deg;
     p.particles.count = long_version() ? 600 : 120;
     p.material.collision_time = 8.0e-4;
+    // The published integrator setting, pinned: these tests are about the protocol and need
+    // speed, not the accuracy of the default (verlet, delta = 200; README, "Accuracy").
+    p.integrator.scheme = Scheme::gear4;
+    p.integrator.steps_per_collision = 50.0;
     p.protocol.max_time = 3.0;  // bounded: a stuck case ends as time_limit
     p.protocol.settle_max_time = 5.0;
     p.protocol.max_shakes = 3;
