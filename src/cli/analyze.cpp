@@ -941,7 +941,12 @@ std::vector<store::PointPlan> read_points(const fs::path& store, std::string& na
 
 int analyze_store(const fs::path& store, bool json, bool write, std::ostream& out,
                   std::ostream& err) {
-    if (!fs::exists(store::journal_path(store)))
+    std::error_code ec;
+    const bool journal_exists = fs::exists(store::journal_path(store), ec);
+    if (ec)
+        throw core::StoreError("cannot access the store's journal '" +
+                               store::journal_path(store).string() + "': " + ec.message());
+    if (!journal_exists)
         throw core::StoreError("no store at '" + store.string() + "' (its journal '" +
                                store::journal_path(store).string() + "' does not exist)");
     std::string name;

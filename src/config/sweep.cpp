@@ -126,18 +126,18 @@ const std::array key_table = {
            [](P& p, V v) { p.material.system.mu = num(v); }},
     KeyDef{"material", "kt_over_kn", "material.kt_over_kn", Kind::real, 0, 10, closed, closed, "",
            [](P& p, V v) { p.material.kt_over_kn = num(v); }},
-    KeyDef{"material", "youngs_modulus_pa", "material.youngs_modulus_pa", Kind::real, 0, 1e13, open, closed, "Pa",
+    KeyDef{"material", "youngs_modulus_pa", "material.youngs_modulus_pa", Kind::real, 1, 1e13, closed, closed, "Pa",
            [](P& p, V v) { p.material.youngs_modulus = num(v); }},
     KeyDef{"material", "poisson_ratio", "material.poisson_ratio", Kind::real, -1, 0.5, open, closed, "",
            [](P& p, V v) { p.material.poisson_ratio = num(v); }},
-    KeyDef{"material", "collision_time_s", "material.collision_time_s", Kind::real, 0, 1, open, closed, "s",
+    KeyDef{"material", "collision_time_s", "material.collision_time_s", Kind::real, 1e-9, 1, closed, closed, "s",
            [](P& p, V v) { p.material.collision_time = num(v); }},
     // [walls]: particle-wall contacts and wall roughness
     KeyDef{"walls", "e_n", "walls.e_n", Kind::real, 0, 1, open, closed, "",
            [](P& p, V v) { p.material.wall.e_n = num(v); }},
     KeyDef{"walls", "mu", "walls.mu", Kind::real, 0, 10, closed, closed, "",
            [](P& p, V v) { p.material.wall.mu = num(v); }},
-    KeyDef{"walls", "particle_diameter_cm", "walls.particle_diameter_cm", Kind::real, 0, 100, open, closed, "cm",
+    KeyDef{"walls", "particle_diameter_cm", "walls.particle_diameter_cm", Kind::real, 0.01, 100, closed, closed, "cm",
            [](P& p, V v) { p.hopper.wall_diameter = num(v) * cm; }},
     KeyDef{"walls", "spacing", "walls.spacing", Kind::real, 0.1, 100, closed, closed, "wall diameters",
            [](P& p, V v) { p.hopper.wall_spacing = num(v); }},
@@ -270,7 +270,15 @@ std::optional<std::string> range_error(const KeyDef& d, double v, const std::str
 }
 
 // A close match among the options, for "did you mean" hints.
+// A name from the file, shortened for messages (a 1 MB key must not make a 1 MB message).
+std::string clip(std::string_view name, std::size_t limit = 64) {
+    if (name.size() <= limit) return std::string(name);
+    return std::string(name.substr(0, limit)) + "... (" + std::to_string(name.size()) +
+           " characters)";
+}
+
 std::string suggestion(std::string_view word, const std::vector<std::string>& options) {
+    if (word.size() > 64) return "";  // no real key is that long; and keep the work bounded
     auto distance = [](std::string_view a, std::string_view b) {
         std::vector<std::size_t> row(b.size() + 1);
         for (std::size_t j = 0; j <= b.size(); ++j)
@@ -402,6 +410,48 @@ toml::table Parser::parse_toml() const {
         throw ConfigError(file_ + ":" + std::to_string(line) + ":" + std::to_string(col) +
                           ": not a TOML text file (contains a NUL byte)");
     }
+    // toml++ recurses once per part of a dotted key and per level of nested arrays and inline
+    // tables: refuse absurd depths before it sees them (a sweep file needs a handful).
+    constexpr int max_depth = 64;
+    int line = 1, dots = 0, depth = 0;
+    bool in_key = true;  // before the first '=' of the line
+    char quote = 0;
+    bool comment = false;
+    const bool multiline_strings = text_.find("\"\"\"") != std::string_view::npos ||
+                                   text_.find("'''") != std::string_view::npos;
+    for (const char c : text_) {
+        if (c == '\n') {
+            ++line;
+            dots = 0;
+            in_key = true;
+            comment = false;
+            if (!multiline_strings) quote = 0;  // single-line strings end with their line
+            continue;
+        }
+        if (comment) continue;
+        if (quote != 0) {
+            if (c == quote) quote = 0;
+            continue;
+        }
+        if (c == '#') {
+            comment = true;
+        } else if (c == '"' || c == '\'') {
+            quote = c;
+        } else if (c == '=') {
+            in_key = false;
+        } else if (c == '.' && in_key) {
+            ++dots;
+        } else if (c == '[' || c == '{') {
+            ++depth;
+        } else if (c == ']' || c == '}') {
+            depth = std::max(0, depth - 1);
+        }
+        if (dots > max_depth || depth > max_depth)
+            throw ConfigError(file_ + ":" + std::to_string(line) + ": " +
+                              (dots > max_depth ? "a dotted key" : "nested arrays or tables") +
+                              " deeper than " + std::to_string(max_depth) +
+                              " levels; a sweep file needs a few");
+    }
     try {
         return toml::parse(text_, file_);
     } catch (const toml::parse_error& e) {
@@ -472,9 +522,8 @@ void Parser::read_scene_section(std::string_view section, const toml::node& node
         const KeyDef* d = find_key(section, k.str());
         if (!d) {
             const auto allowed = keys_of(section);
-            fail(k.source(), "unknown key '" + std::string(k.str()) + "' in [" +
-                                 std::string(section) + "]; allowed: " + join(allowed) +
-                                 suggestion(k.str(), allowed));
+            fail(k.source(), "unknown key '" + clip(k.str()) + "' in [" + std::string(section) +
+                                 "]; allowed: " + join(allowed) + suggestion(k.str(), allowed));
         }
         base_[std::string(d->name)] = Given{d, read_value(v, *d)};
     }
@@ -527,8 +576,8 @@ void Parser::read_campaign(const toml::node& node, SweepFile& out) const {
             c.realizations = *read_realizations(v, "campaign.realizations");
         } else {
             std::vector<std::string> allowed(campaign_keys.begin(), campaign_keys.end());
-            fail(k.source(), "unknown key '" + key + "' in [campaign]; allowed: " + join(allowed) +
-                                 suggestion(key, allowed));
+            fail(k.source(), "unknown key '" + clip(key) + "' in [campaign]; allowed: " +
+                                 join(allowed) + suggestion(key, allowed));
         }
     }
     if (c.name.empty()) fail(node.source(), "[campaign] needs a name, e.g. name = \"survival\"");
@@ -589,15 +638,15 @@ std::vector<PointDraft> Parser::read_sweep(const toml::node& node) const {
             for (auto&& [k2, v2] : *v.as_table()) {
                 const std::string full = key + "." + std::string(k2.str());
                 if (key == "hopper" && (k2.str() == "D_cm" || k2.str() == "theta_deg"))
-                    fail(k2.source(), "write " + std::string(k2.str()) +
+                    fail(k2.source(), "write " + clip(k2.str()) +
                                           " = [...] directly in "
                                           "[sweep], not as '" +
                                           full + "'");
                 const KeyDef* d = find_key(key, k2.str());
                 if (!d) {
                     const auto allowed = keys_of(key);
-                    fail(k2.source(), "unknown key '" + full + "' in [sweep]; allowed in " + key +
-                                          ": " + join(allowed) + suggestion(full, all_names));
+                    fail(k2.source(), "unknown key '" + clip(full) + "' in [sweep]; allowed in " +
+                                          key + ": " + join(allowed) + suggestion(full, all_names));
                 }
                 read_axis(*d, v2);
             }
@@ -605,7 +654,7 @@ std::vector<PointDraft> Parser::read_sweep(const toml::node& node) const {
             std::string shown = key;
             if (auto sub = v.as_table(); sub && !sub->empty())
                 shown += "." + std::string(sub->begin()->first.str());
-            fail(k.source(), "unknown key '" + shown + "' in [sweep]; " + allowed_text +
+            fail(k.source(), "unknown key '" + clip(shown) + "' in [sweep]; " + allowed_text +
                                  suggestion(shown, all_names));
         }
     }
@@ -647,7 +696,7 @@ std::vector<PointDraft> Parser::read_points(const toml::node& node) const {
     if (arr->empty()) fail(node.source(), "points is an empty list: give at least one point");
     const std::string allowed =
         "D_cm, theta_deg, realizations, and inline tables hopper, material, walls, integrator, "
-        "protocol";
+        "protocol, fields";
     std::vector<PointDraft> out;
     for (std::size_t i = 0; i < arr->size(); ++i) {
         const toml::node& pn = *arr->get(i);
@@ -673,12 +722,12 @@ std::vector<PointDraft> Parser::read_points(const toml::node& node) const {
                 for (auto&& [k2, v2] : *sub) {
                     const std::string full = key + "." + std::string(k2.str());
                     if (key == "hopper" && (k2.str() == "D_cm" || k2.str() == "theta_deg"))
-                        fail(k2.source(), "write " + std::string(k2.str()) +
+                        fail(k2.source(), "write " + clip(k2.str()) +
                                               " directly in the point, not as '" + full + "'");
                     const KeyDef* d = find_key(key, k2.str());
                     if (!d) {
                         const auto keys = keys_of(key);
-                        fail(k2.source(), "unknown key '" + full + "' in " + origin +
+                        fail(k2.source(), "unknown key '" + clip(full) + "' in " + origin +
                                               "; allowed in " + key + ": " + join(keys) +
                                               suggestion(k2.str(), keys));
                     }
@@ -687,7 +736,7 @@ std::vector<PointDraft> Parser::read_points(const toml::node& node) const {
             } else {
                 std::vector<std::string> opts = {"D_cm", "theta_deg", "realizations"};
                 opts.insert(opts.end(), scene_sections.begin(), scene_sections.end());
-                fail(k.source(), "unknown key '" + key + "' in " + origin +
+                fail(k.source(), "unknown key '" + clip(key) + "' in " + origin +
                                      "; allowed: " + allowed + suggestion(key, opts));
             }
         }
@@ -800,10 +849,10 @@ SweepFile Parser::run() {
         else if (key == "points")
             points = &v;
         else if (v.is_table())
-            fail(k.source(), "unknown section [" + key + "]; allowed: " + join(sections) +
+            fail(k.source(), "unknown section [" + clip(key) + "]; allowed: " + join(sections) +
                                  suggestion(key, sections));
         else
-            fail(k.source(), "unknown key '" + key +
+            fail(k.source(), "unknown key '" + clip(key) +
                                  "' at the top level (outside any section); "
                                  "allowed sections: " +
                                  join(sections) + suggestion(key, sections));

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <sstream>
+#include <string_view>
+#include <utility>
 
 #include "hopper/core/error.hpp"
 
@@ -40,7 +42,7 @@ void validate_scene(const SceneParams& p) {
     require_range("hopper.width", h.width, 2.0 * s.d_large, 100.0, true, " m");
     require_range("hopper.outlet", h.outlet, 0.0, h.width, true, " m");
     require_range("hopper.theta", h.theta, 0.0, pi / 2, false, " rad");
-    require_range("walls.diameter", h.wall_diameter, 0.0, 1.0, true, " m");
+    require_range("walls.diameter", h.wall_diameter, 1e-4, 1.0, false, " m");
     // No system particle may slip between two wall particles: gap < d_small.
     const double max_spacing = 1.0 + s.d_small / h.wall_diameter;
     if (!(h.wall_spacing >= 0.1 && h.wall_spacing < max_spacing)) {
@@ -62,10 +64,10 @@ void validate_scene(const SceneParams& p) {
     require_range("walls.e_n", m.wall.e_n, 0.0, 1.0, true);
     require_range("walls.mu", m.wall.mu, 0.0, 10.0);
     require_range("material.kt_over_kn", m.kt_over_kn, 0.0, 10.0);
-    require_range("material.youngs_modulus", m.youngs_modulus, 0.0, 1e13, true, " Pa");
+    require_range("material.youngs_modulus", m.youngs_modulus, 1.0, 1e13, false, " Pa");
     require_range("material.poisson_ratio", m.poisson_ratio, -1.0, 0.5);
     if (m.collision_time)
-        require_range("material.collision_time", *m.collision_time, 0.0, 1.0, true, " s");
+        require_range("material.collision_time", *m.collision_time, 1e-9, 1.0, false, " s");
     require_range("integrator.steps_per_collision", p.integrator.steps_per_collision, 2.0, 1e5);
     require_range("integrator.skin", p.integrator.skin, 0.0, 10.0, true);
     require_range("gravity", p.gravity, 0.0, 1e3, true, " m/s^2");
@@ -147,6 +149,19 @@ DerivedConstants derive_constants(const SceneParams& p) {
     c.gamma_n_wall = -2.0 * std::log(mat.wall.e_n) / c.tau_c;
     c.dt = c.tau_c / p.integrator.steps_per_collision;
     c.t_check = p.protocol.t_check.value_or(2.0 * std::sqrt(s.d_large / p.gravity));
+    // Every value is in range on its own; their combination must still give usable numbers.
+    const std::pair<const char*, double> derived[] = {
+        {"m_small", c.m_small}, {"m_large", c.m_large},        {"tau_c", c.tau_c},
+        {"k_n", c.k_n},         {"gamma_n", c.gamma_n_system}, {"gamma_n (walls)", c.gamma_n_wall},
+        {"dt", c.dt},           {"t_check", c.t_check}};
+    for (const auto& [name, v] : derived)
+        if (!std::isfinite(v) || (v <= 0.0 && std::string_view(name).substr(0, 7) != "gamma_n")) {
+            std::ostringstream msg;
+            msg << "the parameters give an unusable derived constant " << name << " = " << v
+                << " (masses from density, thickness and diameters; k_n from the collision "
+                   "time; dt = tau_c / steps_per_collision): change the extreme value";
+            throw ConfigError(msg.str());
+        }
     return c;
 }
 

@@ -24,7 +24,15 @@ void place_along(const std::vector<Vec2>& pts, double spacing, double d, bool mi
     double total = 0.0;
     for (std::size_t k = 1; k < pts.size(); ++k)
         total += (pts[k] - pts[k - 1]).norm();
-    const int n = std::max(1, int(std::ceil(total / spacing - 1e-9)));
+    const double count = std::ceil(total / spacing - 1e-9);
+    if (!(count <= 1e7)) {
+        std::ostringstream msg;
+        msg << "the walls would need " << count << " wall particles (" << total
+            << " m of wall at a spacing of " << spacing
+            << " m); use larger wall particles (walls.particle_diameter_cm) or a smaller hopper";
+        throw core::ConfigError(msg.str());
+    }
+    const int n = std::max(1, int(count));
     const double step = total / n;
     std::size_t seg = 1;
     double seg_start = 0.0;
@@ -128,7 +136,7 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
     layout.outline = outline;
 
     // Gate: a row across the outlet between the two innermost wall particles.
-    const int n_gate = std::max(1, int(std::ceil(2 * x0 / spacing - 1e-9)));
+    const int n_gate = std::max(1, int(std::min(1e7, std::ceil(2 * x0 / spacing - 1e-9))));
     for (int k = 1; k < n_gate; ++k)
         layout.gate.push_back({Vec2(-x0 + k * 2 * x0 / n_gate, 0.0), dw});
     return layout;

@@ -170,6 +170,29 @@ TEST(SweepParse, FieldKeysAreCheckedLikeEveryOther) {
                 AllOf(HasSubstr("unknown key 'enable'"), HasSubstr("did you mean")));
 }
 
+// Found by tests/fuzz: inputs that crashed the parser, overflowed derived constants or gave
+// unbounded messages are clean errors now.
+TEST(SweepParse, AbsurdInputsFoundByTheFuzzerAreCleanErrors) {
+    std::string deep;
+    for (int k = 0; k < 100000; ++k)
+        deep += k ? ".a" : "a";
+    EXPECT_THAT(error_of(deep + " = 1\n"), HasSubstr("deeper than 64 levels"));
+    EXPECT_THAT(error_of("x = " + std::string(100000, '[') + "\n"),
+                HasSubstr("deeper than 64 levels"));
+    EXPECT_THAT(error_of("[material]\ncollision_time_s = 1e-300\n"),
+                AllOf(HasSubstr("collision_time_s"), HasSubstr("1e-09")));
+    EXPECT_THAT(error_of("[material]\nyoungs_modulus_pa = 5e-324\n"),
+                HasSubstr("youngs_modulus_pa"));
+    EXPECT_THAT(error_of("[walls]\nparticle_diameter_cm = 1e-300\n"),
+                HasSubstr("particle_diameter_cm"));
+    const std::string long_key(1'000'000, 'q');
+    const std::string msg = error_of("[hopper]\n" + long_key + " = 1\n");
+    EXPECT_THAT(msg, HasSubstr("1000000 characters"));
+    EXPECT_LT(msg.size(), 1000u);
+    // Comments and strings may hold any number of dots and brackets.
+    EXPECT_NO_THROW(parse("# " + std::string(500, '.') + std::string(500, '[') + "\n"));
+}
+
 TEST(ShippedCampaigns, PaperDirectoryHoldsExactlyTheEightStudies) {
     std::set<std::string> found;
     for (const auto& e : fs::directory_iterator(source_dir / "campaigns/paper"))

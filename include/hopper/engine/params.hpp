@@ -56,7 +56,7 @@ struct MaterialParams {
 struct IntegratorParams {
     Scheme scheme = Scheme::verlet;
     double steps_per_collision = 200.0;  // delta: dt = tau_c / delta
-    double skin = 0.4;                  // Verlet skin, in units of d_small (bench_engine)
+    double skin = 0.4;                   // Verlet skin, in units of d_small (bench_engine)
 };
 
 struct ProtocolParams {
