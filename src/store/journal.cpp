@@ -143,7 +143,16 @@ JournalScan scan_fd(int fd, const fs::path& path, const RecordVisitor& visit) {
             throw core::StoreError(where + ": unknown record type " + std::to_string(type) +
                                    " at byte " + std::to_string(pos) +
                                    " (written by a newer version?)");
-        visit(static_cast<RecordType>(type), pos, payload);
+        try {
+            visit(static_cast<RecordType>(type), pos, payload);
+        } catch (const core::StoreError& e) {
+            // Name the file and the record: the decoders only know what they were reading.
+            static const char* const names[] = {"",      "run start", "result",
+                                                "error", "run end",   "sync"};
+            throw core::StoreError(where + " is damaged: its " + names[type] + " record at byte " +
+                                   std::to_string(pos) + " has a valid checksum but cannot be " +
+                                   "used: " + e.what());
+        }
         pos += record_header_size + len;
         scan.valid_bytes = pos;
         ++scan.records;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <csignal>
 #include <random>
+#include <system_error>
 
 #include "h5.hpp"
 #include "hopper/core/error.hpp"
@@ -29,6 +30,18 @@ void fsync_path(const fs::path& p, bool directory = false) {
     if (fd < 0) return;
     ::fsync(fd);
     ::close(fd);
+}
+
+// Whether `p` exists; false only when it does not (or a directory on its way is missing). Any
+// other failure to look (a symlink loop, no permission) is a StoreError naming the path, not a
+// missing file.
+bool exists_or_throw(const fs::path& p, const char* what) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(p, ec);
+    if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
+        throw core::StoreError(std::string("cannot access ") + what + " '" + p.string() +
+                               "': " + ec.message());
+    return fs::exists(st);
 }
 
 fs::path parent_or_dot(const fs::path& p) {
@@ -131,8 +144,8 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
     m.opt = std::move(options);
     h5::quiet_errors();
     std::error_code ec;
-    const bool have_journal = fs::exists(m.jpath, ec);
-    const bool have_h5 = fs::exists(path, ec);
+    const bool have_journal = exists_or_throw(m.jpath, "the store's journal");
+    const bool have_h5 = exists_or_throw(path, "the store file");
     if (!have_journal) {
         if (have_h5) {
             const layout::Inspection in = layout::inspect(path);
@@ -313,8 +326,8 @@ void Store::end_run(const RunEndRecord& r) {
 StoreStatus read_status(const fs::path& store) {
     const fs::path jpath = journal_path(store);
     std::error_code ec;
-    if (!fs::exists(jpath, ec)) {
-        if (!fs::exists(store, ec))
+    if (!exists_or_throw(jpath, "the store's journal")) {
+        if (!exists_or_throw(store, "the store file"))
             throw core::StoreError("no store at '" + store.string() + "' (neither the file nor " +
                                    "its journal '" + jpath.string() + "' exists)");
         const layout::Inspection in = layout::inspect(store);

@@ -140,6 +140,27 @@ TEST(Journal, DamageBeforeValidRecordsIsAnError) {
     EXPECT_EQ(fs::file_size(p), at[3]) << "a damaged journal must not be truncated";
 }
 
+// A record whose checksum is valid but whose contents the reader cannot use (fuzz_inputs'
+// forged journal records): the error names the journal file, the record and its offset, not only
+// what the decoder was reading.
+TEST(Journal, UnusableRecordIsNamedWithFileAndOffset) {
+    const fs::path p = scratch() / "j";
+    const auto at = write_three(p);
+    try {
+        scan_journal(p, [](RecordType t, std::uint64_t, auto) {
+            if (t == RecordType::result) throw core::StoreError("journal result record: truncated");
+        });
+        FAIL() << "the visitor's error was lost";
+    } catch (const core::StoreError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("journal '" + p.string() + "' is damaged: its result record at byte " +
+                         std::to_string(at[1])),
+                  std::string::npos)
+            << m;
+        EXPECT_NE(m.find("journal result record: truncated"), std::string::npos) << m;
+    }
+}
+
 TEST(Journal, ForeignAndShortFilesAreRefused) {
     const fs::path dir = scratch();
     std::ofstream(dir / "text") << "this is not a journal, but it is long enough\n";

@@ -278,6 +278,23 @@ TEST(Store, ForeignFilesAndAMissingJournalGiveClearErrors) {
     EXPECT_TRUE(contains(message_of([&] { Store s(q); }), "although its journal"));
 }
 
+// A journal that exists but cannot be reached (here a symlink loop; also a directory without
+// permission) is not "missing" (found by fuzz_inputs: the store said "has no journal" and would
+// have tried to create one).
+TEST(Store, JournalThatCannotBeReachedIsNotCalledMissing) {
+    const fs::path p = finished_store(scratch());
+    const fs::path j = journal_path(p);
+    fs::remove(j);
+    fs::create_symlink(j.filename(), j);  // points to itself
+    const std::string opened = message_of([&] { Store s(p); });
+    EXPECT_TRUE(contains(opened, "cannot access the store's journal '" + j.string() + "'"))
+        << opened;
+    EXPECT_TRUE(contains(opened, "symbolic links")) << opened;
+    const std::string status = message_of([&] { read_status(p); });
+    EXPECT_TRUE(contains(status, "cannot access the store's journal")) << status;
+    EXPECT_TRUE(fs::is_symlink(j)) << "nothing was created or replaced";
+}
+
 // Runs `work` in a child process that is expected to die of SIGKILL (a crash injected by the
 // store), and returns whether it did.
 bool dies_of_sigkill(const std::function<void()>& work) {
