@@ -293,11 +293,14 @@ struct CaseResult {
     double wall = 0.0, sim = 0.0;
 };
 
-CaseResult run_case(Scheme scheme, double delta, const Case& cs, int phases) {
+// One case at `phases` evenly spaced onset phases (k + 1/2) / phases; `collide_at(phase)` runs
+// one collision (the engine's, or the replica's).
+template <class Collide>
+CaseResult over_phases(int phases, Collide&& collide_at) {
     std::vector<double> e, tc, w;
     CaseResult out;
     for (int k = 0; k < phases; ++k) {
-        const Collision c = collide(scheme, delta, cs, (k + 0.5) / phases);
+        const Collision c = collide_at((k + 0.5) / phases);
         e.push_back(c.e);
         tc.push_back(c.t_contact);
         w.push_back(c.omega);
@@ -308,6 +311,10 @@ CaseResult run_case(Scheme scheme, double delta, const Case& cs, int phases) {
     out.tc = phase_stat(tc);
     out.w = phase_stat(w);
     return out;
+}
+
+CaseResult run_case(Scheme scheme, double delta, const Case& cs, int phases) {
+    return over_phases(phases, [&](double phase) { return collide(scheme, delta, cs, phase); });
 }
 
 // Reference values of a case: exact for head-on e and t_c, else the scheme at delta = 4000.
@@ -576,18 +583,8 @@ Collision collide_replica(Scheme scheme, const Variant& var, double delta, const
 
 CaseResult run_case_replica(Scheme scheme, const Variant& var, double delta, const Case& cs,
                             int phases) {
-    std::vector<double> e, tc, w;
-    for (int k = 0; k < phases; ++k) {
-        const Collision c = collide_replica(scheme, var, delta, cs, (k + 0.5) / phases);
-        e.push_back(c.e);
-        tc.push_back(c.t_contact);
-        w.push_back(c.omega);
-    }
-    CaseResult out;
-    out.e = phase_stat(e);
-    out.tc = phase_stat(tc);
-    out.w = phase_stat(w);
-    return out;
+    return over_phases(
+        phases, [&](double phase) { return collide_replica(scheme, var, delta, cs, phase); });
 }
 
 // ----- energy drift ----------------------------------------------------------------------------
