@@ -798,30 +798,42 @@ double System::potential_energy() const {
     return e;
 }
 
-double System::elastic_energy() const {
-    if (pstart_.size() != x_.size() + 1) return 0.0;
-    double e = 0.0;
+template <class Pair, class Wall>
+void System::for_each_touching(Pair&& pair, Wall&& wall) const {
     for (std::size_t i = 0; i < x_.size(); ++i) {
         for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
             const int j = pj_[k];
-            const double d = std::hypot(x_[i] - x_[j], y_[i] - y_[j]);
-            const double ov = r_[i] + r_[j] - d;
-            if (ov <= 0.0) continue;
-            e += 0.5 * config_.particle.k_n * ov * ov;
-            if (history_)
-                e += 0.5 * config_.particle.k_t * (pxi_x_[k] * pxi_x_[k] + pxi_y_[k] * pxi_y_[k]);
+            const double dx = x_[i] - x_[j], dy = y_[i] - y_[j], rs = r_[i] + r_[j];
+            const double d2 = dx * dx + dy * dy;
+            if (d2 < rs * rs) pair(i, j, k, dx, dy, d2);
         }
         for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
             const int j = wj_[k];
-            const double d =
-                std::hypot(x_[i] - wx_[j] - wall_offset_.x(), y_[i] - wy_[j] - wall_offset_.y());
-            const double ov = r_[i] + wr_[j] - d;
-            if (ov <= 0.0) continue;
+            const double dx = x_[i] - wx_[j] - wall_offset_.x();
+            const double dy = y_[i] - wy_[j] - wall_offset_.y();
+            const double rs = r_[i] + wr_[j];
+            const double d2 = dx * dx + dy * dy;
+            if (d2 < rs * rs) wall(i, j, k, dx, dy, d2);
+        }
+    }
+}
+
+double System::elastic_energy() const {
+    if (pstart_.size() != x_.size() + 1) return 0.0;
+    double e = 0.0;
+    for_each_touching(
+        [&](std::size_t i, int j, int k, double, double, double d2) {
+            const double ov = r_[i] + r_[j] - std::sqrt(d2);
+            e += 0.5 * config_.particle.k_n * ov * ov;
+            if (history_)
+                e += 0.5 * config_.particle.k_t * (pxi_x_[k] * pxi_x_[k] + pxi_y_[k] * pxi_y_[k]);
+        },
+        [&](std::size_t i, int j, int k, double, double, double d2) {
+            const double ov = r_[i] + wr_[j] - std::sqrt(d2);
             e += 0.5 * config_.wall.k_n * ov * ov;
             if (history_)
                 e += 0.5 * config_.wall.k_t * (wxi_x_[k] * wxi_x_[k] + wxi_y_[k] * wxi_y_[k]);
-        }
-    }
+        });
     return e;
 }
 
@@ -834,58 +846,39 @@ void System::normal_force_sums(std::span<double> mobile, std::span<double> wall)
     std::fill(mobile.begin(), mobile.end(), 0.0);
     std::fill(wall.begin(), wall.end(), 0.0);
     const bool want_mobile = !mobile.empty(), want_wall = !wall.empty();
-    const ContactParams& pp = config_.particle;
-    const ContactParams& pw = config_.wall;
-    for (std::size_t i = 0; i < n; ++i) {
-        double sum_i = 0.0;
-        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
-            const int j = pj_[k];
-            const double dx = x_[i] - x_[j], dy = y_[i] - y_[j], rs = r_[i] + r_[j];
-            const double d2 = dx * dx + dy * dy;
-            if (d2 >= rs * rs) continue;
+    for_each_touching(
+        [&](std::size_t i, int j, int, double dx, double dy, double d2) {
             const double d = std::sqrt(d2);
             const double v_n = ((vx_[i] - vx_[j]) * dx + (vy_[i] - vy_[j]) * dy) / d;
             const double mbar = 1.0 / (inv_m_[i] + inv_m_[j]);
-            const double f = std::abs(normal_magnitude(pp, mbar, rs - d, v_n));
-            sum_i += f;
-            if (want_mobile) mobile[j] += f;
-        }
-        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
-            const int j = wj_[k];
-            const double dx = x_[i] - wx_[j] - wall_offset_.x();
-            const double dy = y_[i] - wy_[j] - wall_offset_.y();
-            const double rs = r_[i] + wr_[j];
-            const double d2 = dx * dx + dy * dy;
-            if (d2 >= rs * rs) continue;
+            const double f =
+                std::abs(normal_magnitude(config_.particle, mbar, r_[i] + r_[j] - d, v_n));
+            if (want_mobile) {
+                mobile[i] += f;
+                mobile[j] += f;
+            }
+        },
+        [&](std::size_t i, int j, int, double dx, double dy, double d2) {
             const double d = std::sqrt(d2);
             const double v_n =
                 ((vx_[i] - wall_velocity_.x()) * dx + (vy_[i] - wall_velocity_.y()) * dy) / d;
-            const double f = std::abs(normal_magnitude(pw, m_[i], rs - d, v_n));
-            sum_i += f;
+            const double f =
+                std::abs(normal_magnitude(config_.wall, m_[i], r_[i] + wr_[j] - d, v_n));
+            if (want_mobile) mobile[i] += f;
             if (want_wall) wall[j] += f;
-        }
-        if (want_mobile) mobile[i] += sum_i;
-    }
+        });
 }
 
 std::vector<std::pair<int, int>> System::contacts_from_list() {
     ensure_ready();
     std::vector<std::pair<int, int>> out;
-    for (std::size_t i = 0; i < x_.size(); ++i) {
-        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
-            const int j = pj_[k];
-            const double d2 = (x_[i] - x_[j]) * (x_[i] - x_[j]) + (y_[i] - y_[j]) * (y_[i] - y_[j]);
-            if (d2 < (r_[i] + r_[j]) * (r_[i] + r_[j]))
-                out.emplace_back(std::min(id_[i], id_[j]), std::max(id_[i], id_[j]));
-        }
-        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
-            const int j = wj_[k];
-            const double dx = x_[i] - wx_[j] - wall_offset_.x();
-            const double dy = y_[i] - wy_[j] - wall_offset_.y();
-            if (dx * dx + dy * dy < (r_[i] + wr_[j]) * (r_[i] + wr_[j]))
-                out.emplace_back(id_[i], wid_[j]);
-        }
-    }
+    for_each_touching(
+        [&](std::size_t i, int j, int, double, double, double) {
+            out.emplace_back(std::min(id_[i], id_[j]), std::max(id_[i], id_[j]));
+        },
+        [&](std::size_t i, int j, int, double, double, double) {
+            out.emplace_back(id_[i], wid_[j]);
+        });
     std::sort(out.begin(), out.end());
     return out;
 }

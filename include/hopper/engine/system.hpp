@@ -132,6 +132,11 @@ class System {
     friend struct KernelImpl;
 
     void ensure_ready();
+    // Calls pair(i, j, k, dx, dy, d2) for every touching mobile pair of the neighbour list and
+    // wall(i, j, k, dx, dy, d2) for every touching particle-wall pair (k: list entry; dx, dy:
+    // r_i - r_j, walls at their current offset). For the on-demand observables, not the hot loop.
+    template <class Pair, class Wall>
+    void for_each_touching(Pair&& pair, Wall&& wall) const;
     void rebuild();
     void save_history();
     void restore_history();
