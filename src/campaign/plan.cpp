@@ -97,6 +97,24 @@ std::string scene_text(const engine::SceneParams& p) {
     l.add("protocol.sample_interval_s", q.sample_interval);
     l.add("protocol.max_overlap", q.max_overlap);
     l.add("gravity_m_s2", p.gravity);
+    // Modelling choices added later (issue 11): listed only when they differ from the default,
+    // so that a point's text (and its physics check) is unchanged for stores written before.
+    const engine::SceneParams d;
+    const auto& h = p.hopper;
+    const auto& m = p.material;
+    if (h.outlet_measure != d.hopper.outlet_measure)
+        l.add("hopper.outlet_measure", engine::to_string(h.outlet_measure));
+    if (h.edge_diameter) l.add("hopper.edge_diameter_m", *h.edge_diameter);
+    if (h.edge_offset != d.hopper.edge_offset) l.add("hopper.edge_offset", h.edge_offset);
+    if (m.gamma_t_over_gamma_n != d.material.gamma_t_over_gamma_n)
+        l.add("material.gamma_t_over_gamma_n", m.gamma_t_over_gamma_n);
+    if (m.slip_rule != d.material.slip_rule)
+        l.add("material.slip_rule", engine::to_string(m.slip_rule));
+    if (m.lever_arm != d.material.lever_arm)
+        l.add("material.lever_arm", engine::to_string(m.lever_arm));
+    if (m.normal_damping != d.material.normal_damping)
+        l.add("material.normal_damping", engine::to_string(m.normal_damping));
+    if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
     // Fields: listed only when on, so stores written before fields existed stay compatible.
     const auto& f = p.fields;
     if (f.enabled) {

@@ -119,6 +119,13 @@ const std::array key_table = {
            [](P& p, V v) { p.particles.thickness = num(v) * cm; }},
     KeyDef{"hopper", "density_kg_m3", "hopper.density_kg_m3", Kind::real, 0, 1e5, open, closed, "kg/m^3",
            [](P& p, V v) { p.particles.density = num(v); }},
+    KeyDef{"hopper", "outlet_measure", "hopper.outlet_measure", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               const auto& s = std::get<std::string>(v);
+               p.hopper.outlet_measure = s == "centre_gap"       ? engine::OutletMeasure::centre_gap
+                                         : s == "inner_envelope" ? engine::OutletMeasure::inner_envelope
+                                                                 : engine::OutletMeasure::surface_gap;
+           }, "surface_gap,centre_gap,inner_envelope"},
     // [material]: particle-particle contacts and stiffness
     KeyDef{"material", "e_n", "material.e_n", Kind::real, 0, 1, open, closed, "",
            [](P& p, V v) { p.material.system.e_n = num(v); }},
@@ -132,6 +139,25 @@ const std::array key_table = {
            [](P& p, V v) { p.material.poisson_ratio = num(v); }},
     KeyDef{"material", "collision_time_s", "material.collision_time_s", Kind::real, 1e-9, 1, closed, closed, "s",
            [](P& p, V v) { p.material.collision_time = num(v); }},
+    KeyDef{"material", "gamma_t_over_gamma_n", "material.gamma_t_over_gamma_n", Kind::real, 0, 10, closed, closed, "",
+           [](P& p, V v) { p.material.gamma_t_over_gamma_n = num(v); }},
+    KeyDef{"material", "slip_rule", "material.slip_rule", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               p.material.slip_rule = std::get<std::string>(v) == "spring_only"
+                                          ? engine::SlipRule::spring_only
+                                          : engine::SlipRule::spring_and_dashpot;
+           }, "spring_and_dashpot,spring_only"},
+    KeyDef{"material", "lever_arm", "material.lever_arm", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               p.material.lever_arm = std::get<std::string>(v) == "contact" ? engine::LeverArm::contact
+                                                                           : engine::LeverArm::radius;
+           }, "radius,contact"},
+    KeyDef{"material", "normal_damping", "material.normal_damping", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               p.material.normal_damping = std::get<std::string>(v) == "exact_restitution"
+                                               ? engine::NormalDamping::exact_restitution
+                                               : engine::NormalDamping::nominal;
+           }, "nominal,exact_restitution"},
     // [walls]: particle-wall contacts and wall roughness
     KeyDef{"walls", "e_n", "walls.e_n", Kind::real, 0, 1, open, closed, "",
            [](P& p, V v) { p.material.wall.e_n = num(v); }},
@@ -141,6 +167,10 @@ const std::array key_table = {
            [](P& p, V v) { p.hopper.wall_diameter = num(v) * cm; }},
     KeyDef{"walls", "spacing", "walls.spacing", Kind::real, 0.1, 100, closed, closed, "wall diameters",
            [](P& p, V v) { p.hopper.wall_spacing = num(v); }},
+    KeyDef{"walls", "edge_diameter_cm", "walls.edge_diameter_cm", Kind::real, 0.01, 100, closed, closed, "cm",
+           [](P& p, V v) { p.hopper.edge_diameter = num(v) * cm; }},
+    KeyDef{"walls", "edge_offset", "walls.edge_offset", Kind::real, 0, 10, closed, closed, "wall diameters",
+           [](P& p, V v) { p.hopper.edge_offset = num(v); }},
     // [integrator]
     KeyDef{"integrator", "scheme", "integrator.scheme", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
@@ -156,6 +186,8 @@ const std::array key_table = {
            [](P& p, V v) { p.protocol.fill_gap = num(v); }},
     KeyDef{"protocol", "fill_speed_m_s", "protocol.fill_speed_m_s", Kind::real, 0, 10, closed, closed, "m/s",
            [](P& p, V v) { p.protocol.fill_speed = num(v); }},
+    KeyDef{"protocol", "fill_base", "protocol.fill_base", Kind::real, 0, 1000, closed, closed, "d_large",
+           [](P& p, V v) { p.protocol.fill_base = num(v); }},
     KeyDef{"protocol", "settle_ke", "protocol.settle_ke", Kind::real, 0, 1, open, closed, "m_large g d_large",
            [](P& p, V v) { p.protocol.settle_ke = num(v); }},
     KeyDef{"protocol", "settle_hold_s", "protocol.settle_hold_s", Kind::real, 0, 100, open, closed, "s",

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "hopper/core/error.hpp"
+#include "hopper/engine/scene.hpp"
 
 namespace hopper::engine {
 
@@ -14,6 +15,30 @@ using core::pi;
 
 std::string to_string(Scheme s) {
     return s == Scheme::gear4 ? "gear4" : "verlet";
+}
+
+std::string to_string(OutletMeasure m) {
+    switch (m) {
+        case OutletMeasure::surface_gap:
+            return "surface_gap";
+        case OutletMeasure::centre_gap:
+            return "centre_gap";
+        case OutletMeasure::inner_envelope:
+            return "inner_envelope";
+    }
+    return "unknown";
+}
+
+std::string to_string(SlipRule r) {
+    return r == SlipRule::spring_and_dashpot ? "spring_and_dashpot" : "spring_only";
+}
+
+std::string to_string(LeverArm a) {
+    return a == LeverArm::radius ? "radius" : "contact";
+}
+
+std::string to_string(NormalDamping d) {
+    return d == NormalDamping::nominal ? "nominal" : "exact_restitution";
 }
 
 namespace {
@@ -43,6 +68,13 @@ void validate_scene(const SceneParams& p) {
     require_range("hopper.outlet", h.outlet, 0.0, h.width, true, " m");
     require_range("hopper.theta", h.theta, 0.0, pi / 2, false, " rad");
     require_range("walls.diameter", h.wall_diameter, 1e-4, 1.0, false, " m");
+    if (h.edge_diameter)
+        require_range("walls.edge_diameter", *h.edge_diameter, 1e-4, 1.0, false, " m");
+    require_range("walls.edge_offset", h.edge_offset, 0.0, 10.0, false, " wall diameters");
+    if (h.outlet_measure == OutletMeasure::inner_envelope && !(h.theta >= 1.0 * core::deg))
+        throw ConfigError(
+            "hopper.outlet_measure = inner_envelope needs theta_deg >= 1 (the inner envelope of a "
+            "flat bottom never crosses the outlet plane); use surface_gap or centre_gap");
     // No system particle may slip between two wall particles: gap < d_small.
     const double max_spacing = 1.0 + s.d_small / h.wall_diameter;
     if (!(h.wall_spacing >= 0.1 && h.wall_spacing < max_spacing)) {
@@ -52,6 +84,27 @@ void validate_scene(const SceneParams& p) {
             << ") so that no particle of diameter " << s.d_small
             << " m slips between two wall particles";
         throw ConfigError(msg.str());
+    }
+    // Neither may a particle slip between the edge disk and its neighbour on the wall.
+    const double d_edge = h.edge_diameter.value_or(h.wall_diameter);
+    const double edge_gap = h.wall_spacing * h.wall_diameter - (d_edge + h.wall_diameter) / 2;
+    if (!(edge_gap < s.d_small)) {
+        std::ostringstream msg;
+        msg << "parameter walls.edge_diameter = " << d_edge << " m leaves a gap of " << edge_gap
+            << " m to the next wall particle, wider than a small particle (" << s.d_small
+            << " m): use a larger edge disk or a smaller walls.spacing";
+        throw ConfigError(msg.str());
+    }
+    {
+        const double free_gap = outlet_free_gap(h);
+        if (!(free_gap > 0.0 && free_gap < h.width)) {
+            std::ostringstream msg;
+            msg << "the outlet's free gap between the edge disks would be " << free_gap
+                << " m (outlet " << h.outlet << " m measured as " << to_string(h.outlet_measure)
+                << ", edge disk " << d_edge << " m, edge_offset " << h.edge_offset
+                << "): allowed (0, width = " << h.width << " m); widen the outlet";
+            throw ConfigError(msg.str());
+        }
     }
     if (s.count < 1 || s.count > 10'000'000)
         throw ConfigError("parameter particles.count = " + std::to_string(s.count) +
@@ -66,6 +119,7 @@ void validate_scene(const SceneParams& p) {
     require_range("material.kt_over_kn", m.kt_over_kn, 0.0, 10.0);
     require_range("material.youngs_modulus", m.youngs_modulus, 1.0, 1e13, false, " Pa");
     require_range("material.poisson_ratio", m.poisson_ratio, -1.0, 0.5);
+    require_range("material.gamma_t_over_gamma_n", m.gamma_t_over_gamma_n, 0.0, 10.0);
     if (m.collision_time)
         require_range("material.collision_time", *m.collision_time, 1e-9, 1.0, false, " s");
     require_range("integrator.steps_per_collision", p.integrator.steps_per_collision, 2.0, 1e5);
@@ -73,6 +127,7 @@ void validate_scene(const SceneParams& p) {
     require_range("gravity", p.gravity, 0.0, 1e3, true, " m/s^2");
     require_range("protocol.fill_gap", pr.fill_gap, 0.0, 10.0);
     require_range("protocol.fill_speed", pr.fill_speed, 0.0, 10.0, false, " m/s");
+    require_range("protocol.fill_base", pr.fill_base, 0.0, 1000.0, false, " d_large");
     require_range("protocol.settle_ke", pr.settle_ke, 0.0, 1.0, true);
     require_range("protocol.settle_hold", pr.settle_hold, 0.0, 100.0, true, " s");
     require_range("protocol.settle_max_time", pr.settle_max_time, 0.0, 1e5, true, " s");
@@ -120,6 +175,17 @@ double hertz_collision_time(double m, double d, double youngs_modulus, double po
            std::pow(m / (E * std::pow(d, 1.0 - b)), 1.0 / p) * std::pow(v0, -b / p);
 }
 
+double normal_damping_rate(NormalDamping form, double e_n, double tau_c) {
+    const double ln_e = std::log(e_n);
+    if (form == NormalDamping::nominal) return -2.0 * ln_e / tau_c;  // gamma_n = -2 ln(e_n) / tau_c
+    // Two large disks (mbar = m_large / 2) are an oscillator x'' + gamma_n x' + w0^2 x = 0 with
+    // w0 = pi / tau_c. It rebounds after half a damped period, pi / w_d with
+    // w_d = sqrt(w0^2 - gamma_n^2 / 4), with restitution exp(-gamma_n pi / (2 w_d)). Setting
+    // that to e_n: gamma_n = -2 w0 ln(e_n) / sqrt(pi^2 + ln(e_n)^2).
+    const double w0 = pi / tau_c;
+    return -2.0 * w0 * ln_e / std::sqrt(pi * pi + ln_e * ln_e);
+}
+
 DerivedConstants derive_constants(const SceneParams& p) {
     const auto& s = p.particles;
     const auto& mat = p.material;
@@ -144,9 +210,8 @@ DerivedConstants derive_constants(const SceneParams& p) {
     // tau_c = pi sqrt(m_large / (2 k_n))  =>  k_n = m_large pi^2 / (2 tau_c^2)
     c.k_n = c.m_large * pi * pi / (2.0 * c.tau_c * c.tau_c);
     c.k_t = mat.kt_over_kn * c.k_n;
-    // gamma_n = -2 ln(e_n) / tau_c
-    c.gamma_n_system = -2.0 * std::log(mat.system.e_n) / c.tau_c;
-    c.gamma_n_wall = -2.0 * std::log(mat.wall.e_n) / c.tau_c;
+    c.gamma_n_system = normal_damping_rate(mat.normal_damping, mat.system.e_n, c.tau_c);
+    c.gamma_n_wall = normal_damping_rate(mat.normal_damping, mat.wall.e_n, c.tau_c);
     c.dt = c.tau_c / p.integrator.steps_per_collision;
     c.t_check = p.protocol.t_check.value_or(2.0 * std::sqrt(s.d_large / p.gravity));
     // Every value is in range on its own; their combination must still give usable numbers.

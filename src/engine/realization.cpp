@@ -79,8 +79,14 @@ SystemConfig system_config(const SceneParams& p, const DerivedConstants& c) {
     sc.skin = p.integrator.skin * p.particles.d_small;
     sc.max_overlap = p.protocol.max_overlap * p.particles.d_small;
     // k_t = kt_over_kn k_n, gamma_t = gamma_n / 2   (spec/physics.md, tangential force)
-    sc.particle = {c.k_n, c.gamma_n_system, c.k_t, c.gamma_n_system / 2, p.material.system.mu};
-    sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall / 2, p.material.wall.mu};
+    // k_t = kt_over_kn k_n, gamma_t = gamma_n / 2   (spec/physics.md, tangential force; the
+    // ratio is material.gamma_t_over_gamma_n, 0.5 by default)
+    const double gt = p.material.gamma_t_over_gamma_n;
+    const bool spring_only = p.material.slip_rule == SlipRule::spring_only;
+    sc.particle = {c.k_n, c.gamma_n_system, c.k_t, c.gamma_n_system * gt, p.material.system.mu,
+                   spring_only};
+    sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall * gt, p.material.wall.mu, spring_only};
+    sc.contact_lever = p.material.lever_arm == LeverArm::contact;
     return sc;
 }
 
@@ -138,7 +144,9 @@ struct Realization::Impl {
     std::int64_t k_field = 1;
     double wall_top = 0.0;
     std::vector<Vec2> outline;
-    double y_region = 0.0;  // the detector region is |x| < D/2, y_region < y < 0
+    // The detector region is |x| < half_gap, y_region < y < y_outlet: below the edge disks
+    // (y_outlet = 0 and half_gap = D/2 in the default geometry).
+    double y_region = 0.0, y_outlet = 0.0, half_gap = 0.0;
 
     Impl(const SceneParams& params, std::uint64_t seed, RunHooks h)
         : p(params), hooks(std::move(h)), wall_start(Clock::now()) {
@@ -167,10 +175,12 @@ struct Realization::Impl {
         k_detect = every(p.protocol.detector_interval, c.dt);
         k_sample = every(p.protocol.sample_interval, c.dt);
         k_settle = every(1e-3, c.dt);
-        y_region = -p.protocol.jam_region_height * p.particles.d_large;
+        y_outlet = edge_disk_centre(p.hopper).y();
+        half_gap = outlet_free_gap(p.hopper) / 2;
+        y_region = y_outlet - p.protocol.jam_region_height * p.particles.d_large;
         // Mean kinetic energy per particle can never exceed the potential energy of a fall from
         // the top of the walls to the removal floor (plus shaking); 100x that is a blow-up.
-        const double drop = layout.wall_top + p.protocol.exit_depth * p.particles.d_large;
+        const double drop = layout.wall_top - y_outlet + p.protocol.exit_depth * p.particles.d_large;
         ke_limit = 100.0 * c.m_large * p.gravity * drop;
         wall_top = layout.wall_top;
         outline = layout.outline;
@@ -276,7 +286,7 @@ struct Realization::Impl {
     // ----- open (step 3) ----------------------------------------------------------------
     void open() {
         sys->remove_walls(gate_ids);
-        sys->set_removal_floor(-p.protocol.exit_depth * p.particles.d_large);
+        sys->set_removal_floor(y_outlet - p.protocol.exit_depth * p.particles.d_large);
         phase = Phase::discharge;
         flow = Flow::flowing;
         td = flow_start = last_occupied = 0.0;
@@ -338,10 +348,9 @@ struct Realization::Impl {
 
     // ----- discharge (steps 3-7) --------------------------------------------------------
     bool region_occupied() const {
-        const double half = p.hopper.outlet / 2;
         const auto x = sys->x(), y = sys->y();
         for (std::size_t i = 0; i < x.size(); ++i)
-            if (y[i] < 0.0 && y[i] > y_region && std::abs(x[i]) < half) return true;
+            if (y[i] < y_outlet && y[i] > y_region && std::abs(x[i]) < half_gap) return true;
         return false;
     }
 
@@ -552,7 +561,7 @@ struct Realization::Impl {
         d.potential_energy_released =
             res.diagnostics.potential_energy_released -
             (sys->potential_energy() +
-             removed_mass * p.gravity * (-p.protocol.exit_depth * p.particles.d_large));
+             removed_mass * p.gravity * (y_outlet - p.protocol.exit_depth * p.particles.d_large));
         return out;
     }
 };

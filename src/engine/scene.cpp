@@ -53,11 +53,51 @@ void place_along(const std::vector<Vec2>& pts, double spacing, double d, bool mi
 
 }  // namespace
 
+double wall_line_crossing(const HopperGeometry& g) {
+    const double d_edge = g.edge_diameter.value_or(g.wall_diameter);
+    switch (g.outlet_measure) {
+        case OutletMeasure::surface_gap:
+            return g.outlet / 2 + d_edge / 2;
+        case OutletMeasure::centre_gap:
+            return g.outlet / 2;
+        case OutletMeasure::inner_envelope:
+            // The inner envelope is the centre line moved d_w/2 towards the material; at y = 0
+            // it lies (d_w/2)/sin(theta) inside the centre line's crossing.
+            if (is_slot(g)) return g.outlet / 2 + g.wall_diameter / 2;
+            return g.outlet / 2 + g.wall_diameter / 2 / std::sin(g.theta);
+    }
+    return g.outlet / 2 + d_edge / 2;
+}
+
+Vec2 edge_disk_centre(const HopperGeometry& g) {
+    // edge_offset wall diameters up the centre line from its crossing with y = 0.
+    const double s0 = g.edge_offset * g.wall_diameter;
+    const double c = is_slot(g) ? 0.0 : std::cos(g.theta);
+    const double s = is_slot(g) ? 1.0 : std::sin(g.theta);
+    return {wall_line_crossing(g) + s0 * c, s0 * s};
+}
+
+double outlet_free_gap(const HopperGeometry& g) {
+    // 2 x_edge - d_edge, written as D plus corrections that vanish for the default geometry
+    // (so that it is exactly D there).
+    const double d_edge = g.edge_diameter.value_or(g.wall_diameter);
+    const double rise = 2.0 * g.edge_offset * g.wall_diameter * (is_slot(g) ? 0.0 : std::cos(g.theta));
+    switch (g.outlet_measure) {
+        case OutletMeasure::surface_gap:
+            return g.outlet + rise;
+        case OutletMeasure::centre_gap:
+            return g.outlet - d_edge + rise;
+        case OutletMeasure::inner_envelope:
+            return g.outlet + 2.0 * (wall_line_crossing(g) - g.outlet / 2) - d_edge + rise;
+    }
+    return g.outlet + rise;
+}
+
 double inner_half_width(const HopperGeometry& g, double y) {
-    // Centre line of the right funnel wall: through (D/2 + d_w/2, 0) at angle theta; the inner
-    // surface is offset by d_w/2 towards the material. Horizontal distance at height y.
+    // Centre line of the right funnel wall: through (x_c, 0) at angle theta; the inner surface
+    // is offset by d_w/2 towards the material. Horizontal distance at height y.
     const double s = std::sin(g.theta), c = std::cos(g.theta);
-    const double centre_x = g.outlet / 2 + g.wall_diameter / 2;
+    const double centre_x = wall_line_crossing(g);
     if (is_slot(g)) return centre_x - g.wall_diameter / 2;
     double funnel;
     if (s < 1e-12) {
@@ -78,16 +118,25 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
     const double a = ps.d_large + gap;  // lattice spacing
     const bool slot = is_slot(g);
     const double s = std::sin(g.theta), c = std::cos(g.theta);
-    const double x0 = g.outlet / 2 + dw / 2;  // centre line of the right funnel wall at y = 0
+    const double x0 = wall_line_crossing(g);  // centre line of the right funnel wall at y = 0
     const double side_x = g.width / 2 + dw / 2;
+    const Vec2 edge = edge_disk_centre(g);
+    const double d_edge = g.edge_diameter.value_or(dw);
 
     SceneLayout layout;
-    layout.funnel_height = slot ? 1e300 : (g.width - g.outlet) / 2 * std::tan(g.theta);
+    // Where the funnel's centre line reaches the side walls' centre line: (side_x - x0) tan
+    // theta, written so that the default geometry (shift = 0) gives the same bits as always.
+    const double shift = x0 - (g.outlet / 2 + dw / 2);
+    layout.funnel_height =
+        slot ? 1e300 : ((g.width - g.outlet) / 2 - shift) * std::tan(g.theta);
 
     // Fill: a square lattice, row by row from the gate up. A site is allowed when a large disk
     // centred there keeps `gap` clear of every wall particle whatever its position on the wall's
     // centre line: distance to the centre line >= d_w/2 + d_large/2 + gap.
-    const double clear = dw / 2 + ps.d_large / 2 + gap;
+    const double clear = std::max(dw, d_edge) / 2 + ps.d_large / 2 + gap;
+    // The lowest row: above the gate (which sits at the edge disks' height) by `clear`, plus
+    // protocol.fill_base.
+    const double y_first = edge.y() + p.protocol.fill_base * ps.d_large + clear;
     const long max_rows = 10'000'000;
     long row = 0;
     int placed = 0;
@@ -100,7 +149,7 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
                 << "one particle plus its clearance; widen the outlet or change theta";
             throw core::ConfigError(msg.str());
         }
-        const double y = clear + row * a;
+        const double y = y_first + row * a;
         // Largest |x| allowed by the funnel wall: (u - x0)(-sin) + y cos >= clear.
         double umax = s > 1e-12 ? x0 + (y * c - clear) / s : 1e300;
         if (!slot) umax = std::min(umax, side_x - clear);
@@ -122,10 +171,11 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
     }
     layout.wall_top = layout.fill_top + 3.0 * ps.d_large;
 
-    // Walls: funnel (truncated at wall_top) then the vertical side wall, each side.
-    std::vector<Vec2> outline{Vec2(x0, 0.0)};
+    // Walls: funnel (truncated at wall_top) then the vertical side wall, each side, starting at
+    // the edge disk.
+    std::vector<Vec2> outline{edge};
     if (slot) {
-        outline.emplace_back(x0, layout.wall_top);
+        outline.emplace_back(edge.x(), layout.wall_top);
     } else if (layout.funnel_height >= layout.wall_top) {
         outline.emplace_back(x0 + layout.wall_top * c / s, layout.wall_top);
     } else {
@@ -133,12 +183,14 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
         outline.emplace_back(side_x, layout.wall_top);
     }
     place_along(outline, spacing, dw, /*mirror=*/true, layout.walls);
+    layout.walls[0].diameter = layout.walls[1].diameter = d_edge;  // the two edge disks
     layout.outline = outline;
 
-    // Gate: a row across the outlet between the two innermost wall particles.
-    const int n_gate = std::max(1, int(std::min(1e7, std::ceil(2 * x0 / spacing - 1e-9))));
+    // Gate: a row across the outlet between the two edge disks, at their height.
+    const double xe = edge.x();
+    const int n_gate = std::max(1, int(std::min(1e7, std::ceil(2 * xe / spacing - 1e-9))));
     for (int k = 1; k < n_gate; ++k)
-        layout.gate.push_back({Vec2(-x0 + k * 2 * x0 / n_gate, 0.0), dw});
+        layout.gate.push_back({Vec2(-xe + k * 2 * xe / n_gate, edge.y()), dw});
     return layout;
 }
 

@@ -148,7 +148,8 @@ struct System::Kernel {
     virtual void prime(System& s) = 0;
 };
 
-template <class Law, Scheme S>
+// Lever: the lever arm of a contact is R - x/2 (true) or R (false, the specification).
+template <class Law, Scheme S, bool Lever>
 struct KernelImpl final : System::Kernel {
     static constexpr bool rot = Law::has_tangential;
 
@@ -230,6 +231,7 @@ struct KernelImpl final : System::Kernel {
         Vec2 F;
         double c;
         double overlap;
+        double li, lj;  // lever arms of i and j (the radii unless Lever)
     };
     HOPPER_HOT_INLINE static void touch(const ContactParams& p, double dt, double dx, double dy,
                                         double d2, double rs, double inv_m_sum, const Vec2& vi,
@@ -239,8 +241,10 @@ struct KernelImpl final : System::Kernel {
         const double inv_d = 1.0 / d;
         const Vec2 nrm(dx * inv_d, dy * inv_d);
         t.overlap = rs - d;
+        t.li = Lever ? ri - 0.5 * t.overlap : ri;
+        t.lj = Lever ? rj - 0.5 * t.overlap : rj;
         const double mbar = 1.0 / inv_m_sum;  // m_i m_j / (m_i + m_j)
-        const Vec2 vij = rot ? contact_velocity(vi, vj, ri, wi, rj, wj, nrm) : Vec2(vi - vj);
+        const Vec2 vij = rot ? contact_velocity(vi, vj, t.li, wi, t.lj, wj, nrm) : Vec2(vi - vj);
         Vec2 spring = Law::has_history ? Vec2(hx, hy) : Vec2::Zero();
         const ContactForce cf = Law::evaluate(p, mbar, nrm, t.overlap, vij, spring, dt);
         if constexpr (Law::has_history) {
@@ -309,8 +313,8 @@ struct KernelImpl final : System::Kernel {
                 fx[j] -= t.F.x();
                 fy[j] -= t.F.y();
                 if constexpr (rot) {
-                    tqi -= ri * t.c;      // -R_i (n x F_t)
-                    tq[j] -= r[j] * t.c;  // -R_j (n x F_t): the same form for the partner
+                    tqi -= t.li * t.c;    // -R_i (n x F_t)
+                    tq[j] -= t.lj * t.c;  // -R_j (n x F_t): the same form for the partner
                 }
                 max_ov = std::max(max_ov, t.overlap);
                 ++contacts;
@@ -330,7 +334,7 @@ struct KernelImpl final : System::Kernel {
                 touch(pw, dt, dx, dy, d2, rs, imi, vi, vw, ri, wi, wr[j], 0.0, sx, sy, t);
                 wfxi += t.F.x();
                 wfyi += t.F.y();
-                if constexpr (rot) tqi -= ri * t.c;
+                if constexpr (rot) tqi -= t.li * t.c;
                 max_ov = std::max(max_ov, t.overlap);
                 ++contacts;
             }
@@ -348,10 +352,17 @@ struct KernelImpl final : System::Kernel {
 
 namespace {
 
+template <class Law, bool Lever>
+std::unique_ptr<System::Kernel> make_kernel_with(Scheme scheme) {
+    if (scheme == Scheme::gear4) return std::make_unique<KernelImpl<Law, Scheme::gear4, Lever>>();
+    return std::make_unique<KernelImpl<Law, Scheme::verlet, Lever>>();
+}
+
 template <class Law>
-std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme) {
-    if (scheme == Scheme::gear4) return std::make_unique<KernelImpl<Law, Scheme::gear4>>();
-    return std::make_unique<KernelImpl<Law, Scheme::verlet>>();
+std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme, bool contact_lever) {
+    // Without tangential forces there is no torque, and the lever arm plays no part.
+    if (contact_lever && Law::has_tangential) return make_kernel_with<Law, true>(scheme);
+    return make_kernel_with<Law, false>(scheme);
 }
 
 }  // namespace
@@ -374,11 +385,11 @@ System::System(const SystemConfig& config) : config_(config) {
     // integrated at all; k_t = 0 needs no spring history.
     history_ = friction && spring;
     if (!friction)
-        kernel_ = make_kernel_for<FrictionlessLaw>(config_.scheme);
+        kernel_ = make_kernel_for<FrictionlessLaw>(config_.scheme, config_.contact_lever);
     else if (!spring)
-        kernel_ = make_kernel_for<ViscousFrictionLaw>(config_.scheme);
+        kernel_ = make_kernel_for<ViscousFrictionLaw>(config_.scheme, config_.contact_lever);
     else
-        kernel_ = make_kernel_for<SpringFrictionLaw>(config_.scheme);
+        kernel_ = make_kernel_for<SpringFrictionLaw>(config_.scheme, config_.contact_lever);
 }
 
 System::~System() = default;

@@ -27,6 +27,9 @@ struct ContactParams {
     double k_t = 0.0;      // N/m
     double gamma_t = 0.0;  // 1/s
     double mu = 0.0;
+    // While sliding, set the spring alone to the Coulomb limit (xi = -F_t / k_t) instead of
+    // spring + dashpot (SlipRule in params.hpp).
+    bool slip_spring_only = false;
 };
 
 // Force on particle i from one contact, split into normal and tangential parts.
@@ -99,9 +102,9 @@ struct SpringFrictionLaw {
         const double ft2 = F_t.squaredNorm();
         if (ft2 > cap * cap) {
             // F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
-            // xi' = -(F_t + gamma_t mbar v_t) / k_t
+            // xi' = -(F_t + gamma_t mbar v_t) / k_t (spring_only: xi' = -F_t / k_t)
             F_t *= cap / std::sqrt(ft2);
-            xi = -(F_t + damping) / p.k_t;
+            xi = p.slip_spring_only ? Vec2(-F_t / p.k_t) : Vec2(-(F_t + damping) / p.k_t);
         }
         return {fn * n, F_t};
     }

@@ -18,12 +18,51 @@ enum class Scheme { gear4, verlet };
 
 std::string to_string(Scheme s);
 
+// How the outlet width D is measured (docs/model.md, "Modelling choices"). Every choice places
+// the outlet edge disks at y = 0; they differ in which distance between the two sides is D.
+enum class OutletMeasure {
+    surface_gap,     // D = free gap between the edge disks' surfaces (the default)
+    centre_gap,      // D = distance between the edge disks' centres (free gap D - d_edge)
+    inner_envelope,  // D = distance between the inclined walls' inner envelopes at y = 0
+};
+
+// What happens to the tangential spring while a contact slides (|F_t*| > mu |F_n|).
+enum class SlipRule {
+    spring_and_dashpot,  // spring set so that spring + dashpot = the capped force (default;
+                         // LAMMPS's gran/hooke/history does the same)
+    spring_only,         // spring alone set to the Coulomb limit: xi = -F_t / k_t
+};
+
+// Lever arm of a contact: from a disk's centre to the contact point.
+enum class LeverArm {
+    radius,   // R_i (the specification's v_ij and torque; the default)
+    contact,  // R_i - x/2: the distance to the middle of the overlap
+};
+
+// How gamma_n follows from e_n.
+enum class NormalDamping {
+    nominal,            // gamma_n = -2 ln(e_n) / tau_c (the specification; the default)
+    exact_restitution,  // gamma_n such that two large disks rebound with exactly e_n
+};
+
+std::string to_string(OutletMeasure m);
+std::string to_string(SlipRule r);
+std::string to_string(LeverArm a);
+std::string to_string(NormalDamping d);
+
 struct HopperGeometry {
     double width = 43.0 * cm;           // W: total inner width between the side walls
     double outlet = 4.5 * cm;           // D: free gap between the innermost wall particles
     double theta = 60.0 * deg;          // wall angle to the horizontal, [0, 90] deg
     double wall_diameter = 0.770 * cm;  // diameter of wall particles (default d_large)
     double wall_spacing = 1.0;          // centre distance of wall particles / wall_diameter
+    OutletMeasure outlet_measure = OutletMeasure::surface_gap;
+    // Diameter of the lowest disk of each inclined wall (the outlet edge); unset = wall_diameter.
+    std::optional<double> edge_diameter;
+    // The inclined walls' disks start this far (in wall diameters, along the wall) above the
+    // point where the wall's centre line crosses the outlet plane y = 0; D is measured at that
+    // crossing. 0 = the edge disks sit on the outlet plane (the default).
+    double edge_offset = 0.0;
 };
 
 struct ParticleSpec {
@@ -48,6 +87,10 @@ struct MaterialParams {
     double poisson_ratio = 0.5;     // sigma
     // tau_c given directly (the published study: 8.0e-4 s); unset = from the Hertz formula.
     std::optional<double> collision_time;
+    double gamma_t_over_gamma_n = 0.5;  // gamma_t / gamma_n (the specification: 1/2)
+    SlipRule slip_rule = SlipRule::spring_and_dashpot;
+    LeverArm lever_arm = LeverArm::radius;
+    NormalDamping normal_damping = NormalDamping::nominal;
 };
 
 // Default: velocity Verlet at delta = 200, the cheapest setting of bench/accuracy whose every
@@ -63,6 +106,7 @@ struct ProtocolParams {
     // Fill (lattice spacing d_large + fill_gap; random velocities up to fill_speed).
     double fill_gap = 0.05;    // in units of d_large
     double fill_speed = 0.05;  // m/s, max initial speed per component
+    double fill_base = 0.0;    // extra height of the lowest fill row, in units of d_large
     // Settle with the outlet closed until the mean kinetic energy per particle stays below
     // settle_ke * m_large g d_large for settle_hold seconds; give up after settle_max_time.
     double settle_ke = 1e-4;
@@ -115,6 +159,9 @@ struct DerivedConstants {
 };
 
 DerivedConstants derive_constants(const SceneParams& p);
+
+// gamma_n (1/s) for restitution e_n and collision time tau_c in the given damping form.
+double normal_damping_rate(NormalDamping form, double e_n, double tau_c);
 
 // The Hertz collision time t_col (spec/physics.md) for disks of mass m, diameter d, material
 // (Y, sigma), impact speed v0.

@@ -27,6 +27,9 @@ struct SystemConfig {
     Vec2 gravity{0.0, -core::standard_gravity};
     double skin = 1e-3;        // m, Verlet skin of the neighbour list
     double max_overlap = 0.0;  // m; > 0: a larger overlap stops the run (SimulationError)
+    // Lever arm R - x/2 (to the middle of the overlap) instead of R, in the contact velocity
+    // and the torque (LeverArm in params.hpp).
+    bool contact_lever = false;
 };
 
 // A particle that left through the removal floor.
@@ -128,7 +131,7 @@ class System {
     struct Kernel;
 
   private:
-    template <class Law, Scheme S>
+    template <class Law, Scheme S, bool Lever>
     friend struct KernelImpl;
 
     void ensure_ready();
