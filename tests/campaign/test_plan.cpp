@@ -46,7 +46,7 @@ std::string refusal(const store::CampaignPlan& stored, const store::CampaignPlan
 TEST(Plan, SceneTextCoversEverySceneParameter) {
     // If this fails, engine::SceneParams gained (or lost) a field: add it to scene_text() in
     // src/campaign/plan.cpp (it decides which stores a sweep may resume), then update the size.
-    EXPECT_EQ(sizeof(engine::SceneParams), 408u);
+    EXPECT_EQ(sizeof(engine::SceneParams), 472u);
     engine::SceneParams p;
     const std::string base = scene_text(p);
     EXPECT_EQ(std::count(base.begin(), base.end(), '\n'), 40);
@@ -65,6 +65,21 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed([](auto& q) { q.protocol.t_check = 0.05; }));
     EXPECT_TRUE(changed([](auto& q) { q.protocol.empty_threshold = 3; }));
     EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));
+    // The modelling choices of issue 11: absent from the text at their defaults (so stores
+    // written before them resume), present when set.
+    for (const char* name : {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over",
+                             "slip_rule", "lever_arm", "normal_damping", "fill_base"})
+        EXPECT_EQ(base.find(name), std::string::npos) << name;
+    EXPECT_TRUE(changed(
+        [](auto& q) { q.hopper.outlet_measure = engine::OutletMeasure::inner_envelope; }));
+    EXPECT_TRUE(changed([](auto& q) { q.hopper.edge_diameter = 0.006; }));
+    EXPECT_TRUE(changed([](auto& q) { q.hopper.edge_offset = 0.5; }));
+    EXPECT_TRUE(changed([](auto& q) { q.material.gamma_t_over_gamma_n = 0.25; }));
+    EXPECT_TRUE(changed([](auto& q) { q.material.slip_rule = engine::SlipRule::spring_only; }));
+    EXPECT_TRUE(changed([](auto& q) { q.material.lever_arm = engine::LeverArm::contact; }));
+    EXPECT_TRUE(changed(
+        [](auto& q) { q.material.normal_damping = engine::NormalDamping::exact_restitution; }));
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.fill_base = 1.0; }));
     // Shortest round-trip numbers: one ulp differs.
     EXPECT_TRUE(changed([](auto& q) { q.material.system.e_n = std::nextafter(0.5, 1.0); }));
 }

@@ -139,6 +139,46 @@ TEST(ShippedCampaigns, OnlyTheFieldsStudyHasFields) {
     }
 }
 
+// The modelling-choice keys of issue 11 land in SceneParams; their defaults are today's model.
+TEST(SweepParse, ModellingChoiceKeysLandInTheScene) {
+    namespace e = hopper::engine;
+    const auto d = parse("").base;
+    EXPECT_EQ(d.hopper.outlet_measure, e::OutletMeasure::surface_gap);
+    EXPECT_FALSE(d.hopper.edge_diameter.has_value());
+    EXPECT_EQ(d.hopper.edge_offset, 0.0);
+    EXPECT_EQ(d.material.gamma_t_over_gamma_n, 0.5);
+    EXPECT_EQ(d.material.slip_rule, e::SlipRule::spring_and_dashpot);
+    EXPECT_EQ(d.material.lever_arm, e::LeverArm::radius);
+    EXPECT_EQ(d.material.normal_damping, e::NormalDamping::nominal);
+    EXPECT_EQ(d.protocol.fill_base, 0.0);
+    const SweepFile s = parse(
+        "[hopper]\noutlet_measure = \"inner_envelope\"\n"
+        "[walls]\nedge_diameter_cm = 0.602\nedge_offset = 0.5\n"
+        "[material]\ngamma_t_over_gamma_n = 0.25\nslip_rule = \"spring_only\"\n"
+        "lever_arm = \"contact\"\nnormal_damping = \"exact_restitution\"\n"
+        "[protocol]\nfill_base = 2\n");
+    const auto& p = s.base;
+    EXPECT_EQ(p.hopper.outlet_measure, e::OutletMeasure::inner_envelope);
+    EXPECT_DOUBLE_EQ(*p.hopper.edge_diameter, 0.00602);
+    EXPECT_EQ(p.hopper.edge_offset, 0.5);
+    EXPECT_EQ(p.material.gamma_t_over_gamma_n, 0.25);
+    EXPECT_EQ(p.material.slip_rule, e::SlipRule::spring_only);
+    EXPECT_EQ(p.material.lever_arm, e::LeverArm::contact);
+    EXPECT_EQ(p.material.normal_damping, e::NormalDamping::exact_restitution);
+    EXPECT_EQ(p.protocol.fill_base, 2.0);
+    EXPECT_THAT(error_of("[hopper]\noutlet_measure = \"centre\"\n"),
+                AllOf(HasSubstr("hopper.outlet_measure"),
+                      HasSubstr("\"surface_gap\", \"centre_gap\", \"inner_envelope\"")));
+    EXPECT_THAT(error_of("[walls]\nedge_offset = 11\n"),
+                AllOf(HasSubstr("walls.edge_offset"), HasSubstr("[0, 10]")));
+    // Sweepable like every other key.
+    const SweepFile sw = parse(
+        "[campaign]\nname = \"t\"\nrealizations = 1\n[sweep]\nD_cm = [3]\ntheta_deg = [45]\n"
+        "material.slip_rule = [\"spring_and_dashpot\", \"spring_only\"]\n");
+    ASSERT_EQ(sw.campaign.points.size(), 2u);
+    EXPECT_EQ(sw.campaign.points[1].scene.material.slip_rule, e::SlipRule::spring_only);
+}
+
 // [fields]: types, choices and the two-key checks give clear errors.
 TEST(SweepParse, FieldKeysAreCheckedLikeEveryOther) {
     const SweepFile s = parse(
