@@ -1,0 +1,322 @@
+#!/usr/bin/python3
+"""Calibration against the published study (issue 11; docs/calibration.md).
+
+usage:
+  /usr/bin/python3 analysis/calibration.py sensitivity STORE.h5 [--out DIR]
+  /usr/bin/python3 analysis/calibration.py targets STORE.h5 [STORE.h5 ...] [--out DIR]
+  /usr/bin/python3 analysis/calibration.py beverloo STORE.h5 [--out DIR]
+
+sensitivity  a store of campaigns/calibration/sensitivity.toml: per wall angle, the discharge rate
+             (particles/s over the 20-80 % part of the exits) of every point, its change against
+             the spec-literal reference point (the point whose settings differ from the others'
+             least: no modelling choice set), with the reference's seed-to-seed standard
+             deviation, and the empty-time change this implies (the hopper empties at a constant
+             rate, so T_empty scales as 1/rate). Writes sensitivity.md and sensitivity.png.
+targets      stores of campaigns/calibration/targets-*.toml: each of the eleven published empty
+             times against the store's (ratio and relative error), one column per store.
+             Writes targets.md.
+beverloo     a store of a D scan at one wall angle (campaigns/calibration/beverloo-*.toml):
+             the discharge rate against D with the 2-D Beverloo fit W = A (D - k d)^(3/2)
+             (d the mean diameter; A and k fitted by least squares). Writes beverloo.md, .png.
+
+A point's settings are read from the store's canonical scene text (/points/scene), never from
+its label. Needs Debian's python3-h5py, -numpy, -scipy and -matplotlib.
+Exit codes: 0 written, 2 bad arguments or a store without the expected points, 1 other errors.
+"""
+import argparse
+import os
+import sys
+
+import h5py
+import numpy as np
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+# The eleven published empty times (s; single realizations, shaking excluded; issue 11).
+# Key: (theta_deg, D_cm, particle e_n, particle mu, wall e_n, wall mu).
+TARGETS = {
+    (60.0, 4.5, 0.5, 0.5, 0.8, 0.5): 12.16,
+    (60.0, 4.5, 0.5, 0.6, 0.8, 0.5): 12.54,
+    (60.0, 4.5, 0.5, 0.7, 0.8, 0.5): 13.07,
+    (60.0, 4.5, 0.5, 0.8, 0.8, 0.5): 13.23,
+    (60.0, 4.5, 0.8, 0.5, 0.8, 0.5): 12.17,
+    (60.0, 4.5, 0.8, 0.6, 0.8, 0.5): 12.46,
+    (60.0, 4.5, 0.8, 0.7, 0.8, 0.5): 12.95,
+    (60.0, 4.5, 0.8, 0.8, 0.8, 0.5): 13.22,
+    (45.0, 4.1, 0.5, 0.8, 0.5, 0.8): 17.27,
+    (45.0, 4.3, 0.5, 0.8, 0.5, 0.8): 15.76,
+    (45.0, 4.5, 0.5, 0.8, 0.5, 0.8): 14.52,
+}
+
+
+
+def fail(msg, code=2):
+    print("calibration.py: error: " + msg, file=sys.stderr)
+    sys.exit(code)
+
+
+class Store:
+    """Points (with their canonical settings) and realizations of one store."""
+
+    def __init__(self, path):
+        if not os.path.exists(path):
+            fail("no store at '%s'" % path)
+        try:
+            f = h5py.File(path, "r")
+        except OSError as e:
+            fail("cannot open '%s' as an HDF5 store: %s" % (path, e))
+        if "points" not in f or "realizations" not in f:
+            fail("'%s' is not a hopper store (no /points or /realizations)" % path)
+        self.path = path
+        self.labels = list(f["points/label"].asstr()[:])
+        self.settings = [parse_scene(t) for t in f["points/scene"].asstr()[:]]
+        r = f["realizations"]
+        self.point = r["point"][:]
+        self.rate = np.where(r["has_discharge_rate"][:].astype(bool), r["discharge_rate"][:],
+                             np.nan)
+        self.empty = np.where(r["has_empty_time"][:].astype(bool), r["empty_time"][:], np.nan)
+        self.seconds = r["task_seconds"][:]
+        self.wall = r["diagnostics/wall_seconds"][:]
+        f.close()
+
+    def values(self, column, i):
+        v = column[self.point == i]
+        return v[np.isfinite(v)]
+
+
+def parse_scene(text):
+    out = {}
+    for line in text.splitlines():
+        if "=" in line:
+            k, v = line.split("=", 1)
+            out[k] = v
+    return out
+
+
+def num(s, key):
+    return float(s[key])
+
+
+def theta_deg(s):
+    return round(num(s, "hopper.theta_rad") * 180.0 / np.pi, 6)
+
+
+def D_cm(s):
+    return round(num(s, "hopper.outlet_m") * 100.0, 6)
+
+
+def choice_text(s, ref):
+    """The settings of s that differ from ref, as 'name=value' (or 'spec-literal')."""
+    diff = [k + "=" + v for k, v in sorted(s.items()) if ref.get(k) != v]
+    return ", ".join(diff) if diff else "spec-literal"
+
+
+def write(out, name, text):
+    os.makedirs(out, exist_ok=True)
+    path = os.path.join(out, name)
+    with open(path, "w") as fh:
+        fh.write(text)
+    print("wrote " + path)
+
+
+def mean_err(v):
+    if len(v) == 0:
+        return np.nan, np.nan, 0
+    if len(v) == 1:
+        return v[0], np.nan, 1
+    return v.mean(), v.std(ddof=1) / np.sqrt(len(v)), len(v)
+
+
+def sensitivity(args):
+    st = Store(args.store)
+    by_theta = {}
+    for i, s in enumerate(st.settings):
+        by_theta.setdefault(theta_deg(s), []).append(i)
+    lines = ["# Sensitivity of the discharge rate to each modelling choice", "",
+             "Store: `%s`. Rate: particles/s over the 20-80 %% part of the exits of each "
+             "realization (5 s of discharge). Change: against the spec-literal reference of the "
+             "same wall angle; noise: the reference's seed-to-seed standard deviation. "
+             "Empty-time change: implied by the rate (T_empty ~ 1/rate), -dW/(W + dW)." % args.store,
+             ""]
+    fig, axes = plt.subplots(1, len(by_theta), figsize=(11, 0.32 * len(st.labels) + 1.5),
+                             sharey=True, squeeze=False)
+    results = {}
+    for col, (theta, idx) in enumerate(sorted(by_theta.items())):
+        # Reference: the point with the most realizations among those with D = 4.5 cm whose
+        # settings are a subset of every other's differences (in practice: the spec-literal one,
+        # run with several seeds).
+        ref = max(idx, key=lambda i: (len(st.values(st.rate, i)), -len(st.settings[i])))
+        ref_rates = st.values(st.rate, ref)
+        if len(ref_rates) < 2:
+            fail("the reference point of theta = %g deg ('%s') has fewer than 2 realizations with "
+                 "a rate: the seed noise cannot be given" % (theta, st.labels[ref]))
+        W0 = ref_rates.mean()
+        noise = ref_rates.std(ddof=1)
+        lines += ["## theta = %g deg (reference: %d seeds, %.1f /s, seed-to-seed sd %.1f /s = "
+                  "%.1f %%)" % (theta, len(ref_rates), W0, noise, 100 * noise / W0), "",
+                  "| choice | rate (1/s) | change | change / noise | implied empty-time change |",
+                  "|---|---|---|---|---|"]
+        rows = []
+        for i in idx:
+            v = st.values(st.rate, i)
+            if len(v) == 0:
+                continue
+            W = v.mean()
+            dW = (W - W0) / W0
+            name = "spec-literal reference" if i == ref else choice_text(st.settings[i],
+                                                                         st.settings[ref])
+            rows.append((name, W, dW, (W - W0) / noise, -dW / (1 + dW), i == ref))
+        rows.sort(key=lambda r: (not r[5], -abs(r[2])))
+        for name, W, dW, z, dT, _ in rows:
+            lines.append("| %s | %.1f | %+.1f %% | %+.1f | %+.1f %% |" % (name, W, 100 * dW, z,
+                                                                       100 * dT))
+        lines.append("")
+        results[theta] = rows
+        ax = axes[0][col]
+        names = [r[0] for r in rows if not r[5]]
+        vals = [100 * r[2] for r in rows if not r[5]]
+        y = np.arange(len(names))
+        ax.barh(y, vals, color=["tab:red" if v < 0 else "tab:blue" for v in vals])
+        ax.axvspan(-100 * noise / W0, 100 * noise / W0, color="0.85", zorder=0,
+                   label="seed noise (1 sd)")
+        ax.set_yticks(y)
+        ax.set_yticklabels(names, fontsize=7)
+        ax.invert_yaxis()
+        ax.axvline(0, color="k", lw=0.8)
+        ax.set_xlabel("discharge rate change (%)")
+        ax.set_title("theta = %g deg, D = 4.5 cm (reference %.0f /s)" % (theta, W0), fontsize=9)
+        ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    out = args.out or "."
+    os.makedirs(out, exist_ok=True)
+    fig.savefig(os.path.join(out, "sensitivity.png"), dpi=130)
+    print("wrote " + os.path.join(out, "sensitivity.png"))
+    text = "\n".join(lines) + "\n"
+    write(out, "sensitivity.md", text)
+    sys.stdout.write(text)
+
+
+def target_key(s):
+    return (theta_deg(s), D_cm(s), round(num(s, "material.e_n"), 6), round(num(s, "material.mu"), 6),
+            round(num(s, "walls.e_n"), 6), round(num(s, "walls.mu"), 6))
+
+
+def targets(args):
+    stores = [Store(p) for p in args.stores]
+    header = "| theta | D (cm) | particles e_n, mu | walls e_n, mu | published (s) |"
+    sep = "|---|---|---|---|---|"
+    for p in args.stores:
+        header += " %s (s) | ratio | error |" % os.path.basename(p)
+        sep += "---|---|---|"
+    lines = ["# The eleven published empty times", "", header, sep]
+    worst = [0.0] * len(stores)
+    sq = [[] for _ in stores]
+    for key, T in sorted(TARGETS.items(), key=lambda kv: (-kv[0][0], kv[0][1:])):
+        th, D, en, mu, wen, wmu = key
+        row = "| %g | %g | %g, %g | %g, %g | %.2f |" % (th, D, en, mu, wen, wmu, T)
+        for k, st in enumerate(stores):
+            found = [i for i, s in enumerate(st.settings) if target_key(s) == key]
+            v = np.concatenate([st.values(st.empty, i) for i in found]) if found else np.zeros(0)
+            if len(v) == 0:
+                row += " - | - | - |"
+                continue
+            m = v.mean()
+            err = (m - T) / T
+            worst[k] = max(worst[k], abs(err))
+            sq[k].append(err * err)
+            row += " %.2f | %.3f | %+.1f %% |" % (m, m / T, 100 * err)
+        lines.append(row)
+    lines.append("")
+    for k, p in enumerate(args.stores):
+        if sq[k]:
+            lines.append("- `%s`: %d of 11 targets, largest error %.1f %%, rms %.1f %%" %
+                         (p, len(sq[k]), 100 * worst[k], 100 * np.sqrt(np.mean(sq[k]))))
+    text = "\n".join(lines) + "\n"
+    write(args.out or ".", "targets.md", text)
+    sys.stdout.write(text)
+
+
+def beverloo(args):
+    from scipy.optimize import curve_fit
+
+    st = Store(args.store)
+    pts = sorted(range(len(st.labels)), key=lambda i: D_cm(st.settings[i]))
+    D, W, sW = [], [], []
+    for i in pts:
+        v = st.values(st.rate, i)
+        if len(v) == 0:
+            continue
+        D.append(D_cm(st.settings[i]))
+        m, e, n = mean_err(v)
+        W.append(m)
+        sW.append(e if n > 1 and np.isfinite(e) and e > 0 else np.nan)
+    D, W, sW = np.array(D), np.array(W), np.array(sW)
+    if len(D) < 3:
+        fail("the Beverloo fit needs at least 3 outlets with a rate; the store has %d" % len(D))
+    s0 = st.settings[pts[0]]
+    frac = num(s0, "particles.small_fraction")
+    d_mean = 100 * (frac * num(s0, "particles.d_small_m") + (1 - frac) * num(s0, "particles.d_large_m"))
+    # Where seeds are missing, use the relative scatter of the others (or 1 %).
+    rel = np.nanmedian(sW / W) if np.any(np.isfinite(sW)) else 0.01
+    sW = np.where(np.isfinite(sW), sW, rel * W)
+
+    def model(x, A, k):
+        return A * np.clip(x - k * d_mean, 1e-9, None) ** 1.5
+
+    (A, k), cov = curve_fit(model, D, W, p0=(W[-1] / (D[-1] - 1.5 * d_mean) ** 1.5, 1.5),
+                            sigma=sW, absolute_sigma=True)
+    eA, ek = np.sqrt(np.diag(cov))
+    chi2 = float(np.sum(((W - model(D, A, k)) / sW) ** 2))
+    lines = ["# Beverloo fit of the discharge rate against D", "",
+             "Store: `%s`, theta = %g deg, d = %.3f cm (number-mean diameter)." %
+             (args.store, theta_deg(s0), d_mean), "",
+             "W = A (D - k d)^(3/2): A = %.1f +- %.1f particles/s/cm^1.5, k = %.3f +- %.3f, "
+             "chi2 = %.1f for %d degrees of freedom." % (A, eA, k, ek, chi2, len(D) - 2), "",
+             "| D (cm) | rate (1/s) | fit (1/s) | residual |", "|---|---|---|---|"]
+    for x, w, e in zip(D, W, sW):
+        lines.append("| %g | %.1f +- %.1f | %.1f | %+.1f %% |" % (x, w, e, model(x, A, k),
+                                                             100 * (w / model(x, A, k) - 1)))
+    text = "\n".join(lines) + "\n"
+    out = args.out or "."
+    write(out, "beverloo.md", text)
+    sys.stdout.write(text)
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
+    ax.errorbar(D, W, yerr=sW, fmt="o", ms=4, label="hopper")
+    xs = np.linspace(min(D) - 0.1, max(D) + 0.1, 200)
+    ax.plot(xs, model(xs, A, k), "-", label="W = A (D - k d)$^{3/2}$, k = %.2f" % k)
+    ax.set_xlabel("outlet D (cm)")
+    ax.set_ylabel("discharge rate (particles/s)")
+    ax.set_title("theta = %g deg" % theta_deg(s0), fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "beverloo.png"), dpi=130)
+    print("wrote " + os.path.join(out, "beverloo.png"))
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="calibration.py", description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    a = sub.add_parser("sensitivity")
+    a.add_argument("store")
+    a.add_argument("--out")
+    a.set_defaults(run=sensitivity)
+    b = sub.add_parser("targets")
+    b.add_argument("stores", nargs="+")
+    b.add_argument("--out")
+    b.set_defaults(run=targets)
+    c = sub.add_parser("beverloo")
+    c.add_argument("store")
+    c.add_argument("--out")
+    c.set_defaults(run=beverloo)
+    args = ap.parse_args()
+    try:
+        args.run(args)
+    except (KeyError, ValueError) as e:
+        fail("unexpected store content: %s" % e, 1)
+
+
+if __name__ == "__main__":
+    main()
