@@ -2,8 +2,10 @@
 #include "cli/parse.hpp"
 
 #include <boost/program_options.hpp>
+#include <chrono>
 #include <cstdlib>
 #include <iostream>
+#include <thread>
 
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
@@ -105,6 +107,18 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         opt.store_options.crash_point = c.substr(0, colon);
         opt.store_options.crash_after =
             static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
+    }
+    // Test hook (not for users): HOPPER_STORE_PAUSE=journal_link:<ms> pauses a run that creates
+    // a new store's journal before linking it into place (the race of two runs on a new store).
+    if (const char* pause = std::getenv("HOPPER_STORE_PAUSE")) {
+        const std::string c = pause;
+        const std::string prefix = "journal_link:";
+        if (c.rfind(prefix, 0) != 0)
+            throw core::ConfigError("HOPPER_STORE_PAUSE must be journal_link:<ms>, got '" + c +
+                                    "'");
+        const auto ms = std::chrono::milliseconds(
+            parse_seed("HOPPER_STORE_PAUSE", c.substr(prefix.size())));
+        opt.store_options.before_journal_link = [ms] { std::this_thread::sleep_for(ms); };
     }
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;

@@ -6,7 +6,9 @@
 
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -238,14 +240,22 @@ void Journal::lock_or_throw() {
     locked_ = false;  // ENOLCK / EINVAL: the file system has no locks; go on unprotected
 }
 
-Journal Journal::create(const fs::path& path) {
-    // Written under a temporary name and linked into place complete, so that a reader never
-    // sees a journal without its header, and two runs cannot both create it.
+Journal Journal::create(const fs::path& path, const BeforeLinkHook& hook) {
+    // Written under a name private to this call and linked into place complete, so that a
+    // reader never sees a journal without its header and two runs cannot both create it. The
+    // private name matters: a shared one ("<journal>.new") let one run unlink the other's file
+    // before it was linked, leaving the other writing every record to a deleted file.
+    std::random_device rd;
+    char suffix[48];
+    std::snprintf(suffix, sizeof suffix, ".new.%ld.%08x", static_cast<long>(::getpid()), rd());
     fs::path tmp = path;
-    tmp += ".new";
-    ::unlink(tmp.c_str());
+    tmp += suffix;
     const int fd = ::open(tmp.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) fail_errno("cannot create the journal", tmp);
+    struct Unlink {  // the private name goes whatever happens
+        const fs::path& p;
+        ~Unlink() { ::unlink(p.c_str()); }
+    } unlink_tmp{tmp};
     Journal j(path, fd, 0, false);
     j.lock_or_throw();
     std::uint8_t header[journal_header_size] = {};
@@ -254,21 +264,60 @@ Journal Journal::create(const fs::path& path) {
     header[15] = static_cast<std::uint8_t>(journal_version >> 8);
     write_all(fd, header, sizeof header, 0, tmp);
     if (::fsync(fd) != 0) fail_errno("cannot sync the journal", tmp);
+    if (hook) hook();
     if (::link(tmp.c_str(), path.c_str()) != 0) {
-        const int err = errno;
-        if (err == EEXIST) {
-            ::unlink(tmp.c_str());
-            errno = err;
-            fail_errno("cannot create the journal", path);
+        if (errno == EEXIST) fail_errno("cannot create the journal", path);
+        if (errno != EPERM && errno != ENOTSUP && errno != EOPNOTSUPP && errno != ENOSYS)
+            fail_errno("cannot link the new journal into place as", path);
+        // A file system without hard links: a rename that refuses to replace; where even that
+        // is missing, the final name created exclusively (a reader may then briefly see a
+        // journal shorter than its header).
+        if (::renameat2(AT_FDCWD, tmp.c_str(), AT_FDCWD, path.c_str(), RENAME_NOREPLACE) != 0) {
+            if (errno == EEXIST) fail_errno("cannot create the journal", path);
+            const int direct = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+            if (direct < 0) fail_errno("cannot create the journal", path);
+            Journal d(path, direct, 0, false);
+            d.lock_or_throw();
+            write_all(direct, header, sizeof header, 0, path);
+            if (::fsync(direct) != 0) fail_errno("cannot sync the journal", path);
+            j = std::move(d);
         }
-        // File systems without hard links: a rename (not exclusive, but still complete).
-        if (::rename(tmp.c_str(), path.c_str()) != 0) fail_errno("cannot create the journal", path);
-    } else {
-        ::unlink(tmp.c_str());
     }
     sync_directory(path);
     j.size_ = journal_header_size;
+    j.check_still_in_place();
     return j;
+}
+
+Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit,
+                                JournalScan& scan, bool& created, const BeforeLinkHook& hook) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0 && errno == ENOENT) {
+        try {
+            Journal j = create(path, hook);
+            created = true;
+            scan = JournalScan{journal_header_size, journal_header_size, 0};
+            return j;
+        } catch (const core::StoreError&) {
+            // Another run created it between our look and our link: use theirs.
+            if (::stat(path.c_str(), &st) != 0) throw;
+        }
+    }
+    created = false;
+    return open(path, visit, scan);
+}
+
+void Journal::check_still_in_place() const {
+    struct stat mine {}, there {};
+    if (::fstat(fd_, &mine) != 0) fail_errno("cannot stat the journal", path_);
+    const bool same = ::stat(path_.c_str(), &there) == 0 && there.st_dev == mine.st_dev &&
+                      there.st_ino == mine.st_ino;
+    if (!same)
+        throw core::StoreError(
+            "the store's journal '" + path_.string() +
+            "' was deleted or replaced while this `campaign run` was writing it; what this run "
+            "recorded since is not in the journal at that path. Stop every other program using "
+            "the store, then run the same command again: it resumes from what the journal holds");
 }
 
 Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalScan& scan) {
@@ -307,6 +356,7 @@ std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> pay
     write_all(fd_, rec.data(), rec.size(), at, path_);
     if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
     size_ += rec.size();
+    check_still_in_place();
     return at;
 }
 

@@ -44,6 +44,15 @@ bool exists_or_throw(const fs::path& p, const char* what) {
     return fs::exists(st);
 }
 
+// A directory where a store file belongs is a mistake in the command line, not a damaged store.
+void refuse_directory(const fs::path& p, const char* what) {
+    std::error_code ec;
+    if (fs::is_directory(p, ec))
+        throw core::StoreError(std::string(what) + " '" + p.string() +
+                               "' is a directory; a store is named by the path of its HDF5 file "
+                               "(--store PATH), e.g. '" + (p / "store.h5").string() + "'");
+}
+
 fs::path parent_or_dot(const fs::path& p) {
     return p.parent_path().empty() ? fs::path(".") : p.parent_path();
 }
@@ -144,58 +153,67 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
     m.opt = std::move(options);
     h5::quiet_errors();
     std::error_code ec;
+    refuse_directory(path, "the store");
+    refuse_directory(m.jpath, "the store's journal");
     const bool have_journal = exists_or_throw(m.jpath, "the store's journal");
     const bool have_h5 = exists_or_throw(path, "the store file");
-    if (!have_journal) {
-        if (have_h5) {
-            const layout::Inspection in = layout::inspect(path);
-            if (in.readable)
-                throw core::StoreError(
-                    m.where() + " has no journal '" + m.jpath.string() +
-                    "': the journal is the record of what finished and must stay beside the "
-                    "store; restore it, or use another --store path (the .h5 file alone can "
-                    "still be read for analysis)");
-            throw core::StoreError(m.where() + " exists and is not a hopper store (" + in.problem +
-                                   "); use another --store path or move the file away");
-        }
-        fs::create_directories(parent_or_dot(path), ec);
-        m.journal.emplace(Journal::create(m.jpath));
-        m.is_new = true;
-    } else {
-        JournalScan scan;
-        m.journal.emplace(Journal::open(
-            m.jpath,
-            [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
-                apply_record(m.state, t, off, p, nullptr);
-            },
-            scan));
-        if (scan.torn_bytes() > 0)
-            m.notes.push_back("dropped an incomplete last journal record (" +
-                              std::to_string(scan.torn_bytes()) +
-                              " bytes, from an interrupted write); its realization runs again");
-        if (m.state.duplicates > 0)
-            m.notes.push_back("the journal holds " + std::to_string(m.state.duplicates) +
-                              " duplicate results; the first of each is kept");
-        m.is_new = m.state.runs.empty();
-        if (have_h5) {
-            const layout::Inspection in = layout::inspect(path);
-            if (in.foreign)
-                throw core::StoreError(m.where() + " is not a hopper store (" + in.problem +
-                                       ") although its journal '" + m.jpath.string() +
-                                       "' is; move the file away so that it can be rebuilt from "
-                                       "the journal");
-            m.h5_in_step = in.readable && in.consistent && journal_says_in_step(m.state) &&
-                           in.token == m.state.last_sync->token &&
-                           in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
-            if (!m.h5_in_step && !m.is_new)
-                m.notes.push_back(
-                    in.readable ? "the HDF5 file is not in step with the journal (the last run "
-                                  "did not close it); rebuilding it from the journal"
-                                : "the HDF5 file is damaged (" + in.problem +
-                                      "); rebuilding it from the journal");
-        } else if (!m.is_new) {
-            m.notes.push_back("the HDF5 file is missing; rebuilding it from the journal");
-        }
+    if (!have_journal && have_h5) {
+        const layout::Inspection in = layout::inspect(path);
+        if (in.readable)
+            throw core::StoreError(
+                m.where() + " has no journal '" + m.jpath.string() +
+                "': the journal is the record of what finished and must stay beside the "
+                "store; restore it, or use another --store path (the .h5 file alone can "
+                "still be read for analysis)");
+        throw core::StoreError(m.where() + " exists and is not a hopper store (" + in.problem +
+                               "); use another --store path or move the file away");
+    }
+    if (!have_journal) fs::create_directories(parent_or_dot(path), ec);
+    // Opens the journal, or creates it; a run that loses the race to create it opens the
+    // winner's (and finds it locked).
+    JournalScan scan;
+    bool created = false;
+    m.journal.emplace(Journal::open_or_create(
+        m.jpath,
+        [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+            apply_record(m.state, t, off, p, nullptr);
+        },
+        scan, created, m.opt.before_journal_link));
+    if (scan.torn_bytes() > 0)
+        m.notes.push_back("dropped an incomplete last journal record (" +
+                          std::to_string(scan.torn_bytes()) +
+                          " bytes, from an interrupted write); its realization runs again");
+    if (m.state.duplicates > 0)
+        m.notes.push_back("the journal holds " + std::to_string(m.state.duplicates) +
+                          " duplicate results; the first of each is kept");
+    m.is_new = m.state.runs.empty();
+    if (!created && exists_or_throw(path, "the store file")) {
+        const layout::Inspection in = layout::inspect(path);
+        if (in.foreign)
+            throw core::StoreError(m.where() + " is not a hopper store (" + in.problem +
+                                   ") although its journal '" + m.jpath.string() +
+                                   "' is; move the file away so that it can be rebuilt from "
+                                   "the journal");
+        // The HDF5 file is written after the journal, so it never holds more than the journal
+        // knows -- unless the journal was replaced. Rebuilding would then destroy results.
+        if (in.readable && in.rows > m.state.rows)
+            throw core::StoreError(
+                m.where() + " holds " + std::to_string(in.rows) + " realizations but its journal '" +
+                m.jpath.string() + "' knows only " + std::to_string(m.state.rows) +
+                ": the journal is not the one this file was written with (replaced or recreated?); "
+                "nothing was changed. Restore the original journal, or move the .h5 file away to "
+                "start from the journal");
+        m.h5_in_step = in.readable && in.consistent && journal_says_in_step(m.state) &&
+                       in.token == m.state.last_sync->token &&
+                       in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
+        if (!m.h5_in_step && !m.is_new)
+            m.notes.push_back(
+                in.readable ? "the HDF5 file is not in step with the journal (the last run "
+                              "did not close it); rebuilding it from the journal"
+                            : "the HDF5 file is damaged (" + in.problem +
+                                  "); rebuilding it from the journal");
+    } else if (!m.is_new) {
+        m.notes.push_back("the HDF5 file is missing; rebuilding it from the journal");
     }
     if (m.opt.crash_point == "journal") m.journal->crash_after_appends(m.opt.crash_after - 1);
     if (!m.journal->locked())
@@ -326,6 +344,7 @@ void Store::end_run(const RunEndRecord& r) {
 StoreStatus read_status(const fs::path& store) {
     const fs::path jpath = journal_path(store);
     std::error_code ec;
+    refuse_directory(store, "the store");
     if (!exists_or_throw(jpath, "the store's journal")) {
         if (!exists_or_throw(store, "the store file"))
             throw core::StoreError("no store at '" + store.string() + "' (neither the file nor " +

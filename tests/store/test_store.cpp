@@ -15,6 +15,7 @@
 #include "fixtures.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/analysis.hpp"
+#include "hopper/store/journal.hpp"
 #include "hopper/store/store.hpp"
 
 namespace hopper::store {
@@ -219,7 +220,7 @@ TEST(Store, StatusWorksWhileARunWrites) {
 TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     const fs::path p = scratch() / "s.h5";
     {
-        Store s(p, StoreOptions{0.0, "", 0});
+        Store s(p, StoreOptions{0.0, "", 0, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 0, fabricated(0)));
         s.append(result_record(B, 1, fabricated(1)));
@@ -278,6 +279,32 @@ TEST(Store, ForeignFilesAndAMissingJournalGiveClearErrors) {
     EXPECT_TRUE(contains(message_of([&] { Store s(q); }), "although its journal"));
 }
 
+// Issue 14, item 5: `--store DIR` said "not an HDF5 file".
+TEST(Store, ADirectoryIsCalledADirectory) {
+    const fs::path dir = scratch();
+    fs::create_directories(dir / "d.h5");
+    for (const fs::path& p : {dir / "d.h5", dir}) {
+        const std::string m = message_of([&] { Store s(p); });
+        EXPECT_TRUE(contains(m, "'" + p.string() + "' is a directory")) << m;
+        EXPECT_TRUE(contains(m, (p / "store.h5").string())) << m;
+        EXPECT_TRUE(contains(message_of([&] { read_status(p); }), "is a directory"));
+    }
+    EXPECT_TRUE(fs::is_empty(dir / "d.h5")) << "nothing was created inside";
+}
+
+// Issue 14, item 1: after the race a journal held only its header while the HDF5 file held every
+// result, and the next run rebuilt (emptied) the file from that journal. A file holding more
+// than its journal knows is refused and left alone.
+TEST(Store, AFileHoldingMoreThanItsJournalIsRefusedNotRebuilt) {
+    const fs::path p = finished_store(scratch());
+    fs::remove(journal_path(p));
+    { Journal j = Journal::create(journal_path(p)); }
+    const std::string m = message_of([&] { Store s(p); });
+    EXPECT_TRUE(contains(m, "holds 3 realizations but its journal")) << m;
+    EXPECT_TRUE(contains(m, "knows only 0")) << m;
+    EXPECT_EQ(read_realizations(p).size(), 3u) << "the file was left alone";
+}
+
 // A journal that exists but cannot be reached (here a symlink loop; also a directory without
 // permission) is not "missing" (found by fuzz_inputs: the store said "has no journal" and would
 // have tried to create one).
@@ -325,7 +352,7 @@ TEST_P(CrashPoint, KilledWriterLosesNothingCountedAsDone) {
     }
     if (std::string(where) == "rebuild") fs::remove(p);  // force a rebuild in the child
     ASSERT_TRUE(dies_of_sigkill([&, where = where, n = n] {
-        Store s(p, StoreOptions{0.0, where, n});
+        Store s(p, StoreOptions{0.0, where, n, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 1, fabricated(1)));
         s.append(result_record(A, 2, fabricated(2)));
