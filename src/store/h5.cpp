@@ -62,6 +62,10 @@ std::optional<T> get_numeric_attr(const Id& loc, const std::string& name, hid_t 
 }  // namespace
 
 void quiet_errors() {
+    // No cleanup at exit: every file is closed explicitly, and HDF5 1.10's own cleanup crashes
+    // (H5D_close) on a file whose writes failed, e.g. on a full disk (issue 14, item 2). Only
+    // effective before the library's first use, so this is the first call of every entry point.
+    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
 }
 

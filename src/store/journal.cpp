@@ -353,8 +353,17 @@ std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> pay
     }
     if (crash_countdown_ > 0) --crash_countdown_;
     const std::uint64_t at = size_;
-    write_all(fd_, rec.data(), rec.size(), at, path_);
-    if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+    try {
+        write_all(fd_, rec.data(), rec.size(), at, path_);
+        if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+    } catch (const core::StoreError& e) {
+        // A full disk or a quota: take the partial record back (best effort; a torn tail is
+        // dropped by the next run anyway) and say what it means.
+        if (::ftruncate(fd_, static_cast<off_t>(at)) == 0) ::fdatasync(fd_);
+        throw core::StoreError(std::string(e.what()) +
+                               "; this record was not written (every earlier one is safe): make "
+                               "room and run the same command again to resume");
+    }
     size_ += rec.size();
     check_still_in_place();
     return at;

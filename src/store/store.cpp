@@ -132,6 +132,20 @@ struct Store::Impl {
         fsync_path(parent_or_dot(path), true);
     }
 
+    // Runs an update of the HDF5 view. Its failure (a full disk, a quota) is reported with what
+    // it means: the journal already holds everything, the view is rebuilt by the next run.
+    template <class F>
+    void update_view(F&& update) {
+        try {
+            update();
+        } catch (const core::StoreError& e) {
+            throw core::StoreError(
+                std::string(e.what()) + "\n  What this run finished is safe in the journal '" +
+                jpath.string() + "'. Make room (or move the store with its journal) and run the "
+                "same command again: it resumes, and rebuilds the HDF5 file from the journal");
+        }
+    }
+
     void maybe_flush() {
         const auto now = std::chrono::steady_clock::now();
         if (opt.flush_interval <= 0.0 ||
@@ -303,8 +317,10 @@ void Store::append(const ResultRecord& r) {
     m.journal->append(RecordType::result, encode(r));
     const std::int64_t row = m.state.apply(r, res);
     m.state.last_type = RecordType::result;
-    if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
-    m.maybe_flush();
+    m.update_view([&] {
+        if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
+        m.maybe_flush();
+    });
 }
 
 void Store::append(const ErrorRecord& r) {
@@ -315,8 +331,10 @@ void Store::append(const ErrorRecord& r) {
     m.journal->append(RecordType::error, encode(r));
     const int p = m.state.apply(r);
     m.state.last_type = RecordType::error;
-    m.writer->error(m.state, p, r);
-    m.maybe_flush();
+    m.update_view([&] {
+        m.writer->error(m.state, p, r);
+        m.maybe_flush();
+    });
 }
 
 void Store::end_run(const RunEndRecord& r) {
@@ -324,11 +342,13 @@ void Store::end_run(const RunEndRecord& r) {
     if (!m.run_open) throw core::StoreError("internal: end_run() outside a run");
     m.journal->append(RecordType::run_end, encode(r));
     m.state.apply(r);
-    m.writer->run_end(m.state);
     std::random_device rd;
     const std::uint64_t token = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ 1u;
     const std::uint64_t at = m.journal->size();
-    m.writer->close(m.state, token, at);
+    m.update_view([&] {
+        m.writer->run_end(m.state);
+        m.writer->close(m.state, token, at);
+    });
     m.writer.reset();
     fsync_path(m.path);
     m.crash_point("close");

@@ -3,7 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <condition_variable>
+#include <csignal>
 #include <fstream>
 #include <mutex>
 #include <optional>
@@ -330,6 +335,42 @@ TEST(Journal, DeletedOrReplacedJournalIsNoticedAtTheNextAppend) {
     fs::rename(p, p.string() + ".moved");
     { Journal other = Journal::create(p); }
     EXPECT_THROW(j.append(RecordType::result, payload(10, 2)), core::StoreError);
+}
+
+// Issue 14, item 2: a record that does not fit on the disk (here a file size limit: the same
+// failed write) is an error that says so, and the partial record is taken back, so the journal
+// ends with its last complete record and the next writer has nothing to drop.
+TEST(Journal, ARecordThatDoesNotFitIsTakenBackAndReported) {
+    const fs::path p = scratch() / "j";
+    { Journal j = Journal::create(p); }
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        ::signal(SIGXFSZ, SIG_IGN);
+        const rlimit limit{4096, 4096};
+        ::setrlimit(RLIMIT_FSIZE, &limit);
+        JournalScan scan;
+        Journal j = Journal::open(p, [](auto, auto, auto) {}, scan);
+        j.append(RecordType::run_start, payload(1000, 1));
+        try {
+            j.append(RecordType::result, payload(8000, 2));
+        } catch (const core::StoreError& e) {
+            const std::string m = e.what();
+            ::_exit(m.find("File too large") != std::string::npos &&
+                            m.find("this record was not written") != std::string::npos
+                        ? 0
+                        : 3);
+        }
+        ::_exit(4);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << "3: wrong message, 4: no error";
+    JournalScan scan;
+    const auto v = read_all(p, &scan);
+    ASSERT_EQ(v.size(), 1u);
+    EXPECT_EQ(scan.torn_bytes(), 0u);
 }
 
 }  // namespace
