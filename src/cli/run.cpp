@@ -39,6 +39,9 @@ po::options_description run_options() {
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
+        ("worker-timeout", po::value<std::string>()->value_name("S"),
+         "seconds a busy worker may send no heartbeat before its realization is handed to "
+         "another worker (default: 5 x the realization's expected duration, at least 300)")  //
         ("help,h", "show this help");
     return d;
 }
@@ -53,7 +56,7 @@ double non_negative(const char* option, const std::string& text) {
 
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
-          "                    [--threads N] [--flush-interval S]\n"
+          "                    [--threads N] [--flush-interval S] [--worker-timeout S]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
@@ -90,6 +93,14 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     if (vm.count("flush-interval"))
         opt.store_options.flush_interval =
             non_negative("--flush-interval", vm["flush-interval"].as<std::string>());
+    if (vm.count("worker-timeout")) {
+        const std::string& t = vm["worker-timeout"].as<std::string>();
+        const double v = parse_finite("--worker-timeout", t);
+        if (!(v >= 0.2))
+            throw core::ConfigError("--worker-timeout must be at least 0.2 (seconds), got '" + t +
+                                    "'");
+        opt.master.worker_timeout = v;
+    }
     if (vm.count("threads")) {
         const std::string& t = vm["threads"].as<std::string>();
         const std::uint64_t n = parse_seed("--threads", t);
