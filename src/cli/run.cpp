@@ -39,6 +39,11 @@ po::options_description run_options() {
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
+        ("no-file-locking",
+         "for file systems without locks (NFS without a lock daemon, Lustre without flock): "
+         "write the store without the journal's lock and with HDF5's file locking off "
+         "(HDF5_USE_FILE_LOCKING=FALSE). Then nothing keeps two runs from writing one store: "
+         "make sure only one runs at a time")  //
         ("worker-timeout", po::value<std::string>()->value_name("S"),
          "seconds a busy worker may send no heartbeat before its realization is handed to "
          "another worker (default: 5 x the realization's expected duration, at least 300)")  //
@@ -57,6 +62,7 @@ double non_negative(const char* option, const std::string& text) {
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
           "                    [--threads N] [--flush-interval S] [--worker-timeout S]\n"
+          "                    [--no-file-locking]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
@@ -93,6 +99,12 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     if (vm.count("flush-interval"))
         opt.store_options.flush_interval =
             non_negative("--flush-interval", vm["flush-interval"].as<std::string>());
+    if (vm.count("no-file-locking")) {
+        opt.store_options.require_lock = false;
+        // HDF5's own switch, read when the library starts (no HDF5 call has been made yet);
+        // every rank parses the same command line, so every rank sets it.
+        ::setenv("HDF5_USE_FILE_LOCKING", "FALSE", 1);
+    }
     if (vm.count("worker-timeout")) {
         const std::string& t = vm["worker-timeout"].as<std::string>();
         const double v = parse_finite("--worker-timeout", t);

@@ -222,7 +222,7 @@ Journal::~Journal() {
     if (fd_ >= 0) ::close(fd_);  // releases the lock
 }
 
-void Journal::lock_or_throw() {
+void Journal::lock_or_throw(bool require_lock) {
     // An open-file-description lock (Linux): it conflicts within one process too, and closing
     // another descriptor of the file does not release it.
     struct flock fl = whole_file_lock(F_WRLCK);
@@ -230,17 +230,27 @@ void Journal::lock_or_throw() {
         locked_ = true;
         return;
     }
-    if (errno == EACCES || errno == EAGAIN) {
+    const int err = errno;
+    if (err == EACCES || err == EAGAIN) {
         ::close(fd_);
         fd_ = -1;
         throw core::StoreError("the store's journal '" + path_.string() +
                                "' is in use by another `campaign run`; wait for it to finish "
                                "or stop it first");
     }
-    locked_ = false;  // ENOLCK / EINVAL: the file system has no locks; go on unprotected
+    locked_ = false;
+    if (!require_lock) return;  // the caller accepted a file system without locks
+    ::close(fd_);
+    fd_ = -1;
+    throw core::StoreError(
+        "cannot lock the store's journal '" + path_.string() + "': " + std::strerror(err) +
+        ". The file system does not support locks (NFS without a lock daemon, Lustre mounted "
+        "without flock); they are what keeps two `campaign run` from writing one store. Use a "
+        "file system with locks for the store, or make sure only one run uses it at a time and "
+        "run with --no-file-locking (which also turns HDF5's file locking off)");
 }
 
-Journal Journal::create(const fs::path& path, const BeforeLinkHook& hook) {
+Journal Journal::create(const fs::path& path, const JournalOptions& options) {
     // Written under a name private to this call and linked into place complete, so that a
     // reader never sees a journal without its header and two runs cannot both create it. The
     // private name matters: a shared one ("<journal>.new") let one run unlink the other's file
@@ -257,14 +267,14 @@ Journal Journal::create(const fs::path& path, const BeforeLinkHook& hook) {
         ~Unlink() { ::unlink(p.c_str()); }
     } unlink_tmp{tmp};
     Journal j(path, fd, 0, false);
-    j.lock_or_throw();
+    j.lock_or_throw(options.require_lock);
     std::uint8_t header[journal_header_size] = {};
     std::memcpy(header, header_magic, sizeof header_magic);
     header[14] = static_cast<std::uint8_t>(journal_version & 0xff);
     header[15] = static_cast<std::uint8_t>(journal_version >> 8);
     write_all(fd, header, sizeof header, 0, tmp);
     if (::fsync(fd) != 0) fail_errno("cannot sync the journal", tmp);
-    if (hook) hook();
+    if (options.before_link) options.before_link();
     if (::link(tmp.c_str(), path.c_str()) != 0) {
         if (errno == EEXIST) fail_errno("cannot create the journal", path);
         if (errno != EPERM && errno != ENOTSUP && errno != EOPNOTSUPP && errno != ENOSYS)
@@ -277,7 +287,7 @@ Journal Journal::create(const fs::path& path, const BeforeLinkHook& hook) {
             const int direct = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
             if (direct < 0) fail_errno("cannot create the journal", path);
             Journal d(path, direct, 0, false);
-            d.lock_or_throw();
+            d.lock_or_throw(options.require_lock);
             write_all(direct, header, sizeof header, 0, path);
             if (::fsync(direct) != 0) fail_errno("cannot sync the journal", path);
             j = std::move(d);
@@ -290,11 +300,12 @@ Journal Journal::create(const fs::path& path, const BeforeLinkHook& hook) {
 }
 
 Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit,
-                                JournalScan& scan, bool& created, const BeforeLinkHook& hook) {
+                                JournalScan& scan, bool& created,
+                                const JournalOptions& options) {
     struct stat st {};
     if (::stat(path.c_str(), &st) != 0 && errno == ENOENT) {
         try {
-            Journal j = create(path, hook);
+            Journal j = create(path, options);
             created = true;
             scan = JournalScan{journal_header_size, journal_header_size, 0};
             return j;
@@ -304,7 +315,7 @@ Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit
         }
     }
     created = false;
-    return open(path, visit, scan);
+    return open(path, visit, scan, options);
 }
 
 void Journal::check_still_in_place() const {
@@ -320,11 +331,12 @@ void Journal::check_still_in_place() const {
             "the store, then run the same command again: it resumes from what the journal holds");
 }
 
-Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalScan& scan) {
+Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalScan& scan,
+                      const JournalOptions& options) {
     const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
     if (fd < 0) fail_errno("cannot open the journal", path);
     Journal j(path, fd, 0, false);
-    j.lock_or_throw();
+    j.lock_or_throw(options.require_lock);
     scan = scan_fd(fd, path, visit);
     if (scan.valid_bytes < scan.file_bytes) {
         if (::ftruncate(fd, static_cast<off_t>(scan.valid_bytes)) != 0)

@@ -192,7 +192,7 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
         [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
             apply_record(m.state, t, off, p, nullptr);
         },
-        scan, created, m.opt.before_journal_link));
+        scan, created, JournalOptions{m.opt.require_lock, m.opt.before_journal_link}));
     if (scan.torn_bytes() > 0)
         m.notes.push_back("dropped an incomplete last journal record (" +
                           std::to_string(scan.torn_bytes()) +
@@ -232,8 +232,8 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
     if (m.opt.crash_point == "journal") m.journal->crash_after_appends(m.opt.crash_after - 1);
     if (!m.journal->locked())
         m.notes.push_back(
-            "the file system does not support locks: nothing prevents two runs "
-            "from writing this store at once");
+            "the file system does not support locks (--no-file-locking): nothing prevents two "
+            "runs from writing this store at once");
 }
 
 Store::~Store() {

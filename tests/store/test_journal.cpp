@@ -246,20 +246,20 @@ TEST(Journal, TwoCreatorsAtOnceNeverLeaveAWriterOnADeletedFile) {
     std::thread b([&] {
         a_paused.wait();
         try {
-            Journal::create(p, [&] {
-                b_paused.raise();
-                a_done.wait();
-            });
+            Journal::create(p, {.before_link = [&] {
+                                b_paused.raise();
+                                a_done.wait();
+                            }});
         } catch (const core::StoreError& e) {
             b_error = e.what();
         }
     });
     std::optional<Journal> a;
     try {
-        a.emplace(Journal::create(p, [&] {
-            a_paused.raise();
-            b_paused.wait();
-        }));
+        a.emplace(Journal::create(p, {.before_link = [&] {
+                                      a_paused.raise();
+                                      b_paused.wait();
+                                  }}));
         a->append(RecordType::result, payload(50, 9));
     } catch (...) {
         a_done.raise();
@@ -292,10 +292,10 @@ TEST(Journal, OpenOrCreateLosingTheRaceFindsTheWinnersJournalInUse) {
         bool created = true;
         try {
             Journal::open_or_create(
-                p, [](auto, auto, auto) {}, scan, created, [&] {
+                p, [](auto, auto, auto) {}, scan, created, {.before_link = [&] {
                     b_paused.raise();
                     a_done.wait();
-                });
+                }});
         } catch (const core::StoreError& e) {
             b_error = e.what();
         }
