@@ -25,13 +25,6 @@ fs::path journal_path(const fs::path& store) {
 
 namespace {
 
-void fsync_path(const fs::path& p, bool directory = false) {
-    const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | (directory ? O_DIRECTORY : 0));
-    if (fd < 0) return;
-    ::fsync(fd);
-    ::close(fd);
-}
-
 // Whether `p` exists; false only when it does not (or a directory on its way is missing). Any
 // other failure to look (a symlink loop, no permission) is a StoreError naming the path, not a
 // missing file.
@@ -55,14 +48,6 @@ void refuse_directory(const fs::path& p, const char* what) {
 
 fs::path parent_or_dot(const fs::path& p) {
     return p.parent_path().empty() ? fs::path(".") : p.parent_path();
-}
-
-// Whether the HDF5 file was closed in step with the journal, judged from the journal alone:
-// the last record is a sync record written right after the file was closed at that length.
-bool journal_says_in_step(const State& s) {
-    return s.last_type == RecordType::sync && s.last_sync &&
-           s.last_sync->journal_bytes == s.last_offset &&
-           s.last_sync->rows == static_cast<std::uint64_t>(s.rows);
 }
 
 // Replays records into a state and an HDF5 writer (rebuild).
@@ -201,7 +186,15 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
         m.notes.push_back("the journal holds " + std::to_string(m.state.duplicates) +
                           " duplicate results; the first of each is kept");
     m.is_new = m.state.runs.empty();
-    if (!created && exists_or_throw(path, "the store file")) {
+    const bool have_file = !created && exists_or_throw(path, "the store file");
+    // A file closed in step whose checksum no longer matches was damaged afterwards: it is
+    // rebuilt from the journal without being opened (damage can make HDF5 crash or loop).
+    const FileCheck file_check =
+        have_file ? check_closed_file(m.state, path) : FileCheck::unrecorded;
+    if (file_check == FileCheck::changed) {
+        m.notes.push_back("the HDF5 file does not match the checksum recorded when it was closed "
+                          "(damaged since); rebuilding it from the journal without opening it");
+    } else if (have_file) {
         const layout::Inspection in = layout::inspect(path);
         if (in.foreign)
             throw core::StoreError(m.where() + " is not a hopper store (" + in.problem +
@@ -217,8 +210,8 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
                 ": the journal is not the one this file was written with (replaced or recreated?); "
                 "nothing was changed. Restore the original journal, or move the .h5 file away to "
                 "start from the journal");
-        m.h5_in_step = in.readable && in.consistent && journal_says_in_step(m.state) &&
-                       in.token == m.state.last_sync->token &&
+        m.h5_in_step = in.readable && in.consistent && m.state.closed_in_step() &&
+                       file_check != FileCheck::other && in.token == m.state.last_sync->token &&
                        in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
         if (!m.h5_in_step && !m.is_new)
             m.notes.push_back(
@@ -352,7 +345,7 @@ void Store::end_run(const RunEndRecord& r) {
     m.writer.reset();
     fsync_path(m.path);
     m.crash_point("close");
-    SyncRecord sync{token, at, static_cast<std::uint64_t>(m.state.rows)};
+    SyncRecord sync{token, at, static_cast<std::uint64_t>(m.state.rows), checksum_file(m.path)};
     m.journal->append(RecordType::sync, encode(sync));
     m.state.last_sync = sync;
     m.state.last_type = RecordType::sync;
@@ -383,7 +376,7 @@ StoreStatus read_status(const fs::path& store) {
     StoreStatus s = state.status();
     s.store = store;
     s.writer_active = journal_locked(jpath);
-    s.hdf5_in_step = !s.writer_active && journal_says_in_step(state) && fs::exists(store, ec);
+    s.hdf5_in_step = !s.writer_active && state.closed_in_step() && fs::exists(store, ec);
     s.journal_bytes = scan.valid_bytes;
     s.torn_bytes = scan.torn_bytes();
     return s;

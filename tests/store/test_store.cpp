@@ -236,6 +236,81 @@ TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
 }
 
+// Build item 5 of issue 14: damage inside an HDF5 file that was closed in step (a disk error
+// later) was read as it is. Here a point's label is altered in the file's bytes (same size):
+// the checksum recorded in the sync record exposes it, and the file is rebuilt from the journal
+// without being opened.
+TEST(Store, AFileDamagedAfterItWasClosedIsRebuiltFromTheJournal) {
+    const fs::path p = finished_store(scratch());
+    const auto before = contents(read_journal_realizations(p));
+    std::string bytes;
+    {
+        std::ifstream in(p, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::string label = B.label, altered = "D_cm=4.7 theta_deg=60";
+    int replaced = 0;
+    for (auto at = bytes.find(label); at != std::string::npos; at = bytes.find(label, at + 1)) {
+        bytes.replace(at, altered.size(), altered);
+        ++replaced;
+    }
+    ASSERT_GT(replaced, 0) << "the label is not stored as plain bytes";
+    std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;
+    {
+        Store s(p);
+        ASSERT_FALSE(s.notes().empty());
+        EXPECT_TRUE(contains(s.notes()[0], "does not match the checksum")) << s.notes()[0];
+        s.begin_run(run_record({A, B}));
+        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    }
+    EXPECT_EQ(contents(read_realizations(p)), before);
+    Store again(p);
+    EXPECT_TRUE(again.notes().empty()) << again.notes()[0];
+}
+
+// Stores written before checksums have sync records without one: still in step, not rebuilt.
+TEST(Store, ASyncRecordWithoutAChecksumStillCountsAsInStep) {
+    const fs::path p = finished_store(scratch());
+    const fs::path j = journal_path(p);
+    std::uint64_t last = 0;
+    SyncRecord sync;
+    scan_journal(j, [&](RecordType t, std::uint64_t off, auto payload) {
+        if (t == RecordType::sync) {
+            last = off;
+            sync = decode_sync(payload);
+        }
+    });
+    ASSERT_TRUE(sync.file.has_value());
+    fs::resize_file(j, last);
+    {
+        JournalScan scan;
+        Journal journal = Journal::open(j, [](auto, auto, auto) {}, scan);
+        sync.file.reset();
+        journal.append(RecordType::sync, encode(sync));
+    }
+    Store s(p);
+    EXPECT_TRUE(s.notes().empty()) << s.notes()[0];
+}
+
+// `campaign analyze` replaces /analysis in a closed file: it records the file's new checksum,
+// so the next run finds the file in step (no rebuild, /analysis kept).
+TEST(Store, ReplacingADerivedGroupKeepsTheFileInStep) {
+    const fs::path p = finished_store(scratch());
+    DerivedGroup g;
+    g.name = "analysis";
+    g.attributes.emplace_back("created", "now");
+    DerivedGroup sub;
+    sub.name = "points";
+    g.groups.push_back(sub);
+    write_derived_group(p, g);
+    write_derived_group(p, g);  // twice: each replacement records its own checksum
+    {
+        Store s(p);
+        EXPECT_TRUE(s.notes().empty()) << s.notes()[0];
+    }
+    EXPECT_EQ(derived_group_members(p, "analysis"), std::vector<std::string>{"points"});
+}
+
 TEST(Store, DamagedOrMissingHdf5IsRebuilt) {
     const fs::path dir = scratch();
     const fs::path p = finished_store(dir);
