@@ -85,11 +85,11 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
     };
 
     auto silence_limit = [&](const Item& item) {
-        const double s = options_.worker_timeout
-                             ? *options_.worker_timeout
-                             : std::max(options_.min_worker_timeout,
-                                        options_.worker_timeout_factor *
-                                            todo[item.index].expected_seconds);
+        const double s =
+            options_.worker_timeout
+                ? *options_.worker_timeout
+                : std::max(options_.min_worker_timeout,
+                           options_.worker_timeout_factor * todo[item.index].expected_seconds);
         return to_duration(s);
     };
 
@@ -130,8 +130,8 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         if (finished[item.index]) {
             const bool same = store::physics_digest(r) == digest[item.index];
             ++(same ? report.late_identical : report.late_different);
-            log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '"
-                 << t.label << "' #" << t.realization << " (worker " << worker << ") is "
+            log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '" << t.label
+                 << "' #" << t.realization << " (worker " << worker << ") is "
                  << (same ? "identical to the stored one; stored once"
                           : "DIFFERENT from the stored one (the engine is deterministic: a bad "
                             "node or a bug); the first is kept")
@@ -247,8 +247,7 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
                 log_ << "campaign: stopping the " << busy.size() << " running realization(s)"
                      << std::endl;
             for (const auto& [w, b] : busy)
-                channel_.send(w,
-                              Message::make(MessageKind::stop_now, todo[b.item.index].task_id));
+                channel_.send(w, Message::make(MessageKind::stop_now, todo[b.item.index].task_id));
             stop_sent = true;
         }
         while (!draining && !idle.empty() && !queue.empty()) {

@@ -40,7 +40,8 @@ double expected_seconds(double particle_steps) {
 
 WorkerOptions worker_options(const RunOptions& opt) {
     WorkerOptions w;
-    if (opt.master.worker_timeout) w.heartbeat_interval = heartbeat_interval_for(*opt.master.worker_timeout);
+    if (opt.master.worker_timeout)
+        w.heartbeat_interval = heartbeat_interval_for(*opt.master.worker_timeout);
     return w;
 }
 
@@ -302,8 +303,7 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     } join{threads};
     QuitWorkers quit(channels.master());
     MasterState state;
-    return finish(c,
-                  run_master(opt, c, channels.master(), {host_name()}, size, &state, out, err));
+    return finish(c, run_master(opt, c, channels.master(), {host_name()}, size, &state, out, err));
 }
 
 }  // namespace hopper::campaign

@@ -139,8 +139,8 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         if (c.rfind(prefix, 0) != 0)
             throw core::ConfigError("HOPPER_STORE_PAUSE must be journal_link:<ms>, got '" + c +
                                     "'");
-        const auto ms = std::chrono::milliseconds(
-            parse_seed("HOPPER_STORE_PAUSE", c.substr(prefix.size())));
+        const auto ms =
+            std::chrono::milliseconds(parse_seed("HOPPER_STORE_PAUSE", c.substr(prefix.size())));
         opt.store_options.before_journal_link = [ms] { std::this_thread::sleep_for(ms); };
     }
     opt.code_version = HOPPER_VERSION;

@@ -388,7 +388,8 @@ std::optional<std::string> integer_overflow_message(std::string_view text, int l
         if (l.front() == '[') {
             const auto close = l.find(']');
             if (close != std::string_view::npos)
-                section = std::string(l.substr(l.find_first_not_of('['), close - l.find_first_not_of('[')));
+                section = std::string(
+                    l.substr(l.find_first_not_of('['), close - l.find_first_not_of('[')));
         } else if (n == line && l.find('=') != std::string_view::npos) {
             std::string_view k = l.substr(0, l.find('='));
             std::string_view v = l.substr(l.find('=') + 1);
@@ -407,8 +408,9 @@ std::optional<std::string> integer_overflow_message(std::string_view text, int l
                std::to_string(max_int) + "] (TOML integers are 64-bit signed)";
     const KeyDef* d = find_name(full);
     if (!d) d = find_name(key);
-    if (d) return std::string(d->name) + " = " + clip(value) + " is out of range: allowed " +
-                  range_text(*d);
+    if (d)
+        return std::string(d->name) + " = " + clip(value) + " is out of range: allowed " +
+               range_text(*d);
     return clip(full) + " = " + clip(value) + " is not a 64-bit integer (TOML integers are in [" +
            std::to_string(std::numeric_limits<std::int64_t>::min()) + ", " +
            std::to_string(max_int) + "])";

@@ -30,9 +30,10 @@ herr_t collect_error(unsigned n, const H5E_error2_t* e, void* data) {
     }
     for (const auto& line : stack)
         if (line.find("unable to lock file") != std::string::npos) {
-            msg += ". The file system does not support HDF5's file locks (NFS without a lock "
-                   "daemon, Lustre without flock): run with HDF5_USE_FILE_LOCKING=FALSE in the "
-                   "environment (`campaign run --no-file-locking` sets it)";
+            msg +=
+                ". The file system does not support HDF5's file locks (NFS without a lock "
+                "daemon, Lustre without flock): run with HDF5_USE_FILE_LOCKING=FALSE in the "
+                "environment (`campaign run --no-file-locking` sets it)";
             break;
         }
     throw core::StoreError(msg);

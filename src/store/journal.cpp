@@ -299,9 +299,8 @@ Journal Journal::create(const fs::path& path, const JournalOptions& options) {
     return j;
 }
 
-Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit,
-                                JournalScan& scan, bool& created,
-                                const JournalOptions& options) {
+Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit, JournalScan& scan,
+                                bool& created, const JournalOptions& options) {
     struct stat st {};
     if (::stat(path.c_str(), &st) != 0 && errno == ENOENT) {
         try {
@@ -319,7 +318,8 @@ Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit
 }
 
 void Journal::check_still_in_place() const {
-    struct stat mine {}, there {};
+    struct stat mine {
+    }, there{};
     if (::fstat(fd_, &mine) != 0) fail_errno("cannot stat the journal", path_);
     const bool same = ::stat(path_.c_str(), &there) == 0 && there.st_dev == mine.st_dev &&
                       there.st_ino == mine.st_ino;

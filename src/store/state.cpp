@@ -38,8 +38,7 @@ ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& 
 }
 
 bool State::closed_in_step() const {
-    return last_type == RecordType::sync && last_sync &&
-           last_sync->journal_bytes == last_offset &&
+    return last_type == RecordType::sync && last_sync && last_sync->journal_bytes == last_offset &&
            last_sync->rows == static_cast<std::uint64_t>(rows);
 }
 

@@ -43,7 +43,8 @@ void refuse_directory(const fs::path& p, const char* what) {
     if (fs::is_directory(p, ec))
         throw core::StoreError(std::string(what) + " '" + p.string() +
                                "' is a directory; a store is named by the path of its HDF5 file "
-                               "(--store PATH), e.g. '" + (p / "store.h5").string() + "'");
+                               "(--store PATH), e.g. '" +
+                               (p / "store.h5").string() + "'");
 }
 
 fs::path parent_or_dot(const fs::path& p) {
@@ -126,7 +127,8 @@ struct Store::Impl {
         } catch (const core::StoreError& e) {
             throw core::StoreError(
                 std::string(e.what()) + "\n  What this run finished is safe in the journal '" +
-                jpath.string() + "'. Make room (or move the store with its journal) and run the "
+                jpath.string() +
+                "'. Make room (or move the store with its journal) and run the "
                 "same command again: it resumes, and rebuilds the HDF5 file from the journal");
         }
     }
@@ -192,8 +194,9 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
     const FileCheck file_check =
         have_file ? check_closed_file(m.state, path) : FileCheck::unrecorded;
     if (file_check == FileCheck::changed) {
-        m.notes.push_back("the HDF5 file does not match the checksum recorded when it was closed "
-                          "(damaged since); rebuilding it from the journal without opening it");
+        m.notes.push_back(
+            "the HDF5 file does not match the checksum recorded when it was closed "
+            "(damaged since); rebuilding it from the journal without opening it");
     } else if (have_file) {
         const layout::Inspection in = layout::inspect(path);
         if (in.foreign)
@@ -205,8 +208,9 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
         // knows -- unless the journal was replaced. Rebuilding would then destroy results.
         if (in.readable && in.rows > m.state.rows)
             throw core::StoreError(
-                m.where() + " holds " + std::to_string(in.rows) + " realizations but its journal '" +
-                m.jpath.string() + "' knows only " + std::to_string(m.state.rows) +
+                m.where() + " holds " + std::to_string(in.rows) +
+                " realizations but its journal '" + m.jpath.string() + "' knows only " +
+                std::to_string(m.state.rows) +
                 ": the journal is not the one this file was written with (replaced or recreated?); "
                 "nothing was changed. Restore the original journal, or move the .h5 file away to "
                 "start from the journal");
@@ -214,11 +218,11 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
                        file_check != FileCheck::other && in.token == m.state.last_sync->token &&
                        in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
         if (!m.h5_in_step && !m.is_new)
-            m.notes.push_back(
-                in.readable ? "the HDF5 file is not in step with the journal (the last run "
-                              "did not close it); rebuilding it from the journal"
-                            : "the HDF5 file is damaged (" + in.problem +
-                                  "); rebuilding it from the journal");
+            m.notes.push_back(in.readable
+                                  ? "the HDF5 file is not in step with the journal (the last run "
+                                    "did not close it); rebuilding it from the journal"
+                                  : "the HDF5 file is damaged (" + in.problem +
+                                        "); rebuilding it from the journal");
     } else if (!m.is_new) {
         m.notes.push_back("the HDF5 file is missing; rebuilding it from the journal");
     }

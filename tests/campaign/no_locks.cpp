@@ -20,11 +20,13 @@ bool is_lock_command(int cmd) {
 
 using FcntlFn = int (*)(int, int, ...);
 
-int forward(const char* name, int fd, int cmd, void* arg) {
-    static FcntlFn real_fcntl = reinterpret_cast<FcntlFn>(dlsym(RTLD_NEXT, "fcntl"));
-    static FcntlFn real_fcntl64 = reinterpret_cast<FcntlFn>(dlsym(RTLD_NEXT, "fcntl64"));
-    FcntlFn f = name[5] == '6' && real_fcntl64 ? real_fcntl64 : real_fcntl;
-    return f(fd, cmd, arg);
+// The C library's fcntl64 (on 64-bit Linux the same call as fcntl), or fcntl without it.
+FcntlFn real_fcntl() {
+    static const FcntlFn f = [] {
+        void* f64 = dlsym(RTLD_NEXT, "fcntl64");
+        return reinterpret_cast<FcntlFn>(f64 ? f64 : dlsym(RTLD_NEXT, "fcntl"));
+    }();
+    return f;
 }
 
 }  // namespace
@@ -37,6 +39,7 @@ int flock(int, int) {
     return -1;
 }
 
+// A lock command fails as on a file system without locks; anything else goes to the C library.
 int fcntl(int fd, int cmd, ...) {
     va_list ap;
     va_start(ap, cmd);
@@ -46,19 +49,10 @@ int fcntl(int fd, int cmd, ...) {
         errno = ENOLCK;
         return -1;
     }
-    return forward("fcntl", fd, cmd, arg);
+    return real_fcntl()(fd, cmd, arg);
 }
 
-int fcntl64(int fd, int cmd, ...) {
-    va_list ap;
-    va_start(ap, cmd);
-    void* arg = va_arg(ap, void*);
-    va_end(ap);
-    if (is_lock_command(cmd)) {
-        errno = ENOLCK;
-        return -1;
-    }
-    return forward("fcntl64", fd, cmd, arg);
-}
+// Callers built with large-file support call fcntl64: the same function.
+int fcntl64(int fd, int cmd, ...) __attribute__((alias("fcntl")));
 
 }  // extern "C"

@@ -84,19 +84,23 @@ class Harness {
         store_.begin_run(run);
         options_ = opt;
         WorkerOptions wopt;
-        if (opt.worker_timeout) wopt.heartbeat_interval = heartbeat_interval_for(*opt.worker_timeout);
+        if (opt.worker_timeout)
+            wopt.heartbeat_interval = heartbeat_interval_for(*opt.worker_timeout);
         for (int w = 0; w < workers; ++w)
             threads_.emplace_back([this, w, wopt] {
-                run_worker(channels_.worker(w), [this, w](int task, const engine::RunHooks& h) {
-                    int call;
-                    {
-                        std::lock_guard lock(mutex_);
-                        call = ++calls_[task];
-                        order_.push_back(task);
-                        ran_on_[task].push_back(w + 1);
-                    }
-                    return behaviour_(todo_.at(static_cast<std::size_t>(task)), call, h);
-                }, wopt);
+                run_worker(
+                    channels_.worker(w),
+                    [this, w](int task, const engine::RunHooks& h) {
+                        int call;
+                        {
+                            std::lock_guard lock(mutex_);
+                            call = ++calls_[task];
+                            order_.push_back(task);
+                            ran_on_[task].push_back(w + 1);
+                        }
+                        return behaviour_(todo_.at(static_cast<std::size_t>(task)), call, h);
+                    },
+                    wopt);
             });
     }
     ~Harness() {

@@ -12,8 +12,8 @@
 #include <fstream>
 #include <mutex>
 #include <optional>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "fixtures.hpp"
@@ -291,11 +291,10 @@ TEST(Journal, OpenOrCreateLosingTheRaceFindsTheWinnersJournalInUse) {
         JournalScan scan;
         bool created = true;
         try {
-            Journal::open_or_create(
-                p, [](auto, auto, auto) {}, scan, created, {.before_link = [&] {
-                    b_paused.raise();
-                    a_done.wait();
-                }});
+            Journal::open_or_create(p, [](auto, auto, auto) {}, scan, created, {.before_link = [&] {
+                                        b_paused.raise();
+                                        a_done.wait();
+                                    }});
         } catch (const core::StoreError& e) {
             b_error = e.what();
         }
@@ -350,7 +349,8 @@ TEST(Journal, ARecordThatDoesNotFitIsTakenBackAndReported) {
         const rlimit limit{4096, 4096};
         ::setrlimit(RLIMIT_FSIZE, &limit);
         JournalScan scan;
-        Journal j = Journal::open(p, [](auto, auto, auto) {}, scan);
+        Journal j = Journal::open(
+            p, [](auto, auto, auto) {}, scan);
         j.append(RecordType::run_start, payload(1000, 1));
         try {
             j.append(RecordType::result, payload(8000, 2));

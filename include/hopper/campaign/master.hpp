@@ -50,16 +50,16 @@ struct MasterOptions {
 };
 
 struct MasterReport {
-    int stored = 0;       // results stored by this run (any status)
-    int failed = 0;       // of which with status failed
-    int errors = 0;       // attempts that raised exceptions
-    int gave_up = 0;      // tasks left in error after max_attempts
-    int interrupted = 0;  // running tasks stopped early (they run again on resume)
-    int not_started = 0;  // tasks never handed out because of a stop request
-    int reassigned = 0;       // realizations handed to another worker after a silence
-    int late_identical = 0;   // late results of reassigned realizations equal to the stored one
-    int late_different = 0;   // ... that differ (the engine is deterministic: a bug or a bad node)
-    int silent_at_end = 0;    // workers still silent when the run ended
+    int stored = 0;          // results stored by this run (any status)
+    int failed = 0;          // of which with status failed
+    int errors = 0;          // attempts that raised exceptions
+    int gave_up = 0;         // tasks left in error after max_attempts
+    int interrupted = 0;     // running tasks stopped early (they run again on resume)
+    int not_started = 0;     // tasks never handed out because of a stop request
+    int reassigned = 0;      // realizations handed to another worker after a silence
+    int late_identical = 0;  // late results of reassigned realizations equal to the stored one
+    int late_different = 0;  // ... that differ (the engine is deterministic: a bug or a bad node)
+    int silent_at_end = 0;   // workers still silent when the run ended
     bool stopped = false;
     std::string stop_reason;
     double wall_seconds = 0.0;

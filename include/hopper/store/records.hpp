@@ -103,7 +103,7 @@ FileChecksum checksum_file(const std::filesystem::path& path);
 struct SyncRecord {
     std::uint64_t token = 0;
     std::uint64_t journal_bytes = 0;
-    std::uint64_t rows = 0;             // rows in /realizations
+    std::uint64_t rows = 0;            // rows in /realizations
     std::optional<FileChecksum> file;  // absent in sync records written before checksums
 };
 
