@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <deque>
 #include <map>
+#include <set>
 
 #include "hopper/campaign/report.hpp"
 #include "hopper/core/error.hpp"
@@ -34,6 +35,15 @@ struct Item {
     int attempt;
 };
 
+struct Busy {
+    Item item;
+    Clock::time_point heard;  // the last message from the worker (or when the task was sent)
+};
+
+Clock::duration to_duration(double seconds) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
 }  // namespace
 
 Master::Master(MasterChannel& channel, store::Store& store, const StopRequests& stop,
@@ -51,7 +61,12 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
     std::deque<int> idle;
     for (int w = 1; w <= channel_.workers(); ++w)
         idle.push_back(w);
-    std::map<int, Item> busy;
+    std::map<int, Busy> busy;
+    std::map<int, Item> lost;  // silent workers and the realization they were running
+    std::set<int> revived;     // lost workers heard from again (reported once)
+    std::vector<char> finished(todo.size(), 0);    // a result was stored by this run
+    std::vector<char> reassigned(todo.size(), 0);  // handed to another worker after a silence
+    std::map<std::size_t, std::uint64_t> digest;   // reassigned and stored: physics digest
 
     bool draining = false, stop_sent = false, stop_announced = false;
     Clock::time_point drain_deadline{};
@@ -67,6 +82,15 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         log_ << progress_line(totals.finished + report.stored, totals.total,
                               static_cast<int>(busy.size()), failed_now, rate, elapsed)
              << std::endl;
+    };
+
+    auto silence_limit = [&](const Item& item) {
+        const double s =
+            options_.worker_timeout
+                ? *options_.worker_timeout
+                : std::max(options_.min_worker_timeout,
+                           options_.worker_timeout_factor * todo[item.index].expected_seconds);
+        return to_duration(s);
     };
 
     auto record_error = [&](int worker, const Item& item, const std::string& reason) {
@@ -88,51 +112,113 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         }
     };
 
+    // A result for item from worker: checked, then stored unless this run stored one already
+    // (a reassigned realization), in which case it is compared with it.
+    auto accept_result = [&](int worker, const Item& item, const Message& m) {
+        const TaskRef& t = todo[item.index];
+        engine::RealizationResult r;
+        try {
+            r = store::decode_result(m.payload, "result from worker " + std::to_string(worker));
+            if (r.seed != t.seed)
+                throw core::StoreError("result from worker " + std::to_string(worker) +
+                                       " has seed " + std::to_string(r.seed) + ", expected " +
+                                       std::to_string(t.seed));
+        } catch (const core::StoreError& e) {
+            if (!finished[item.index]) record_error(worker, item, e.what());
+            return;
+        }
+        if (finished[item.index]) {
+            const bool same = store::physics_digest(r) == digest[item.index];
+            ++(same ? report.late_identical : report.late_different);
+            log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '" << t.label
+                 << "' #" << t.realization << " (worker " << worker << ") is "
+                 << (same ? "identical to the stored one; stored once"
+                          : "DIFFERENT from the stored one (the engine is deterministic: a bad "
+                            "node or a bug); the first is kept")
+                 << std::endl;
+            return;
+        }
+        store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker, item.attempt,
+                                          m.seconds, store::unix_now(), m.payload});
+        finished[item.index] = 1;
+        if (reassigned[item.index]) digest[item.index] = store::physics_digest(r);
+        ++report.stored;
+        if (r.status == engine::Status::failed) {
+            ++report.failed;
+            ++failed_now;
+        }
+    };
+
     auto handle = [&](int worker, const Message& m) {
+        if (m.kind == MessageKind::heartbeat) {
+            if (const auto it = busy.find(worker); it != busy.end())
+                it->second.heard = Clock::now();
+            else if (lost.count(worker) && revived.insert(worker).second)
+                log_ << "campaign: worker " << worker << " is heard from again; its realization "
+                     << "runs elsewhere too (the first result is stored, the other compared)"
+                     << std::endl;
+            return;
+        }
+        if (const auto lt = lost.find(worker); lt != lost.end()) {
+            // The late reply of a realization that was handed to another worker.
+            const Item item = lt->second;
+            lost.erase(lt);
+            revived.erase(worker);
+            idle.push_back(worker);
+            if (todo[item.index].task_id == m.task && m.kind == MessageKind::result)
+                accept_result(worker, item, m);
+            return;
+        }
         const auto it = busy.find(worker);
-        if (it == busy.end() || todo[it->second.index].task_id != m.task) {
+        if (it == busy.end() || todo[it->second.item.index].task_id != m.task) {
             log_ << "campaign: warning: unexpected message from worker " << worker << " (task "
                  << m.task << "); ignored" << std::endl;
             return;
         }
-        const Item item = it->second;
+        const Item item = it->second.item;
         busy.erase(it);
         idle.push_back(worker);
-        const TaskRef& t = todo[item.index];
         switch (m.kind) {
-            case MessageKind::result: {
-                engine::Status status;
-                try {
-                    const auto r = store::decode_result(
-                        m.payload, "result from worker " + std::to_string(worker));
-                    if (r.seed != t.seed)
-                        throw core::StoreError("result from worker " + std::to_string(worker) +
-                                               " has seed " + std::to_string(r.seed) +
-                                               ", expected " + std::to_string(t.seed));
-                    status = r.status;
-                } catch (const core::StoreError& e) {
-                    record_error(worker, item, e.what());
-                    return;
-                }
-                store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker,
-                                                  item.attempt, m.seconds, store::unix_now(),
-                                                  m.payload});
-                ++report.stored;
-                if (status == engine::Status::failed) {
-                    ++report.failed;
-                    ++failed_now;
-                }
+            case MessageKind::result:
+                accept_result(worker, item, m);
                 break;
-            }
             case MessageKind::error:
-                record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
+                // The other copy of a reassigned realization was stored already.
+                if (!finished[item.index])
+                    record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
                 break;
             case MessageKind::interrupted:
-                ++report.interrupted;
+                if (!finished[item.index]) ++report.interrupted;
                 break;
             default:
                 log_ << "campaign: warning: worker " << worker << " sent message kind "
                      << static_cast<int>(m.kind) << "; ignored" << std::endl;
+        }
+    };
+
+    // Busy workers silent for longer than their realization's limit: reported, and the
+    // realization goes to the front of the queue for another worker.
+    auto check_silence = [&] {
+        const auto now = Clock::now();
+        for (auto it = busy.begin(); it != busy.end();) {
+            const Item item = it->second.item;
+            const auto limit = silence_limit(item);
+            if (now - it->second.heard <= limit) {
+                ++it;
+                continue;
+            }
+            const TaskRef& t = todo[item.index];
+            log_ << "campaign: worker " << it->first << " has been silent for "
+                 << format_duration(std::chrono::duration<double>(now - it->second.heard).count())
+                 << " (limit " << format_duration(std::chrono::duration<double>(limit).count())
+                 << ") running '" << t.label << "' #" << t.realization << "; "
+                 << (draining ? "it runs again on resume" : "handing it to another worker")
+                 << std::endl;
+            lost[it->first] = item;
+            reassigned[item.index] = 1;
+            ++report.reassigned;
+            if (!draining) queue.push_front({item.index, item.attempt + 1});
+            it = busy.erase(it);
         }
     };
 
@@ -160,8 +246,8 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
             if (!stop_announced)
                 log_ << "campaign: stopping the " << busy.size() << " running realization(s)"
                      << std::endl;
-            for (const auto& [w, item] : busy)
-                channel_.send(w, Message::make(MessageKind::stop_now, todo[item.index].task_id));
+            for (const auto& [w, b] : busy)
+                channel_.send(w, Message::make(MessageKind::stop_now, todo[b.item.index].task_id));
             stop_sent = true;
         }
         while (!draining && !idle.empty() && !queue.empty()) {
@@ -171,7 +257,7 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
             idle.pop_front();
             channel_.send(w,
                           Message::make(MessageKind::task, todo[item.index].task_id, item.attempt));
-            busy[w] = item;
+            busy[w] = Busy{item, Clock::now()};
         }
         if (busy.empty() && (queue.empty() || draining)) break;
 
@@ -185,18 +271,22 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         };
         if (progress) bound(next_progress);
         if (draining && !stop_sent) bound(drain_deadline);
+        for (const auto& [w, b] : busy)
+            bound(b.heard + silence_limit(b.item) + std::chrono::milliseconds(1));
         if (auto msg = channel_.receive(wait)) {
             handle(msg->first, msg->second);
             // Drain whatever else is already waiting before handing out more.
             while (auto more = channel_.receive(std::chrono::milliseconds(0)))
                 handle(more->first, more->second);
         }
+        check_silence();
         if (progress && Clock::now() >= next_progress) {
             print_progress();
             next_progress += interval;
         }
     }
     report.not_started = static_cast<int>(queue.size());
+    report.silent_at_end = static_cast<int>(lost.size());
     report.wall_seconds = seconds_since(start);
     report.cpu_seconds = thread_cpu_seconds() - cpu0;
     if (progress) print_progress();

@@ -131,7 +131,15 @@ struct MpiSession::Impl {
 MpiSession::MpiSession() : impl_(std::make_unique<Impl>()) {
     int initialized = 0;
     MPI_Initialized(&initialized);
-    if (!initialized) check(MPI_Init(nullptr, nullptr), "MPI_Init");
+    // Funneled: a worker simulates in a second thread, and only the main thread calls MPI.
+    if (!initialized) {
+        int provided = MPI_THREAD_SINGLE;
+        check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+        if (provided < MPI_THREAD_FUNNELED)
+            throw std::runtime_error(
+                "the MPI library does not allow threads beside the MPI "
+                "thread (MPI_THREAD_FUNNELED)");
+    }
     check(MPI_Comm_dup(MPI_COMM_WORLD, &impl_->comm), "MPI_Comm_dup");
     check(MPI_Comm_rank(impl_->comm, &rank_), "MPI_Comm_rank");
     check(MPI_Comm_size(impl_->comm, &size_), "MPI_Comm_size");

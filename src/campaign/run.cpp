@@ -31,6 +31,20 @@ std::string compiler_id() {
 
 namespace {
 
+// Seconds a realization is expected to take, from the cost model (particle-steps) at a
+// pessimistic 100 ns per particle-step (measured: 35-50 ns on one core, README "Performance").
+// Only the default silence limit of a worker depends on it.
+double expected_seconds(double particle_steps) {
+    return 100e-9 * particle_steps;
+}
+
+WorkerOptions worker_options(const RunOptions& opt) {
+    WorkerOptions w;
+    if (opt.master.worker_timeout)
+        w.heartbeat_interval = heartbeat_interval_for(*opt.master.worker_timeout);
+    return w;
+}
+
 std::string host_name() {
     char buf[256] = {};
     if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
@@ -81,9 +95,15 @@ TaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
     };
 }
 
+// What the caller of run_master() needs to know about how it ended.
+struct MasterState {
+    bool dispatching = false;  // inside Master::run (workers may be busy)
+    int silent_workers = 0;    // workers still silent at the end (hung or stopped)
+};
+
 // The master's whole part: store, plan check, dispatch, summary. Returns the exit code.
 int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
-               std::vector<std::string> hosts, int mpi_size, bool* dispatching, std::ostream& out,
+               std::vector<std::string> hosts, int mpi_size, MasterState* state, std::ostream& out,
                std::ostream& err) {
     const auto& spec = c.sweep.campaign;
     const fs::path store_path = opt.store ? *opt.store : spec.store;
@@ -135,7 +155,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             if (s == store::TaskState::failed) ++totals.failed;
             continue;
         }
-        todo.push_back(TaskRef{t.task_id, label, t.realization, t.seed});
+        todo.push_back(TaskRef{t.task_id, label, t.realization, t.seed,
+                               expected_seconds(cost[static_cast<std::size_t>(t.point_index)])});
     }
     std::stable_sort(todo.begin(), todo.end(), [&](const TaskRef& a, const TaskRef& b) {
         return cost[static_cast<std::size_t>(
@@ -149,10 +170,11 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         << ", " << todo.size() << " to run on " << channel.workers() << " worker"
         << (channel.workers() == 1 ? "" : "s") << std::endl;
 
-    *dispatching = true;
+    state->dispatching = true;
     Master master(channel, st, signals, opt.master, err);
     const MasterReport rep = master.run(todo, totals);
-    *dispatching = false;
+    state->dispatching = false;
+    state->silent_workers = rep.silent_at_end;
 
     const std::string reason =
         rep.stopped ? "interrupted by " + rep.stop_reason : std::string("complete");
@@ -180,6 +202,10 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     err << "campaign: this run stored " << rep.stored << " realization(s) in "
         << format_duration(rep.wall_seconds) << "; master CPU " << share << " of wall time"
         << std::endl;
+    if (rep.reassigned > 0)
+        err << "campaign: " << rep.reassigned << " realization(s) were handed to another worker "
+            << "after their worker went silent; late results: " << rep.late_identical
+            << " identical, " << rep.late_different << " different" << std::endl;
     const std::string resume = "campaign run " + c.sweep.path.string() +
                                (opt.store ? " --store " + opt.store->string() : std::string());
     if (rep.stopped) {
@@ -233,17 +259,25 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
         if (rank != 0) {
             SignalWatcher ignore;  // the master decides; a forwarded signal must not kill us
             auto ch = mpi->worker_channel();
-            run_worker(*ch, make_runner(opt, c));
+            run_worker(*ch, make_runner(opt, c), worker_options(opt));
             return 0;
         }
         auto ch = mpi->master_channel();
-        bool dispatching = false;
+        MasterState state;
         QuitWorkers quit(*ch);
         try {
-            return finish(c,
-                          run_master(opt, c, *ch, std::move(hosts), size, &dispatching, out, err));
+            const int code =
+                finish(c, run_master(opt, c, *ch, std::move(hosts), size, &state, out, err));
+            if (state.silent_workers > 0) {
+                // MPI_Finalize would wait for them for ever. Everything is stored and closed.
+                err << "campaign: " << state.silent_workers << " worker(s) still silent; ending "
+                    << "the MPI job without them (MPI_Abort with exit code " << code << ")"
+                    << std::endl;
+                mpi->abort(code);
+            }
+            return code;
         } catch (const std::exception& e) {
-            if (!dispatching) throw;
+            if (!state.dispatching) throw;
             // Workers may be busy (and blocked sending a large result): end the job. Every
             // stored realization is safe in the journal.
             err << "campaign: error: " << e.what() << "\ncampaign: aborting the MPI job"
@@ -258,7 +292,8 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     const TaskRunner runner = make_runner(opt, c);
     std::vector<std::thread> threads;
     for (int i = 0; i < opt.threads; ++i)
-        threads.emplace_back([&, i] { run_worker(channels.worker(i), runner); });
+        threads.emplace_back(
+            [&, i] { run_worker(channels.worker(i), runner, worker_options(opt)); });
     struct Join {
         std::vector<std::thread>& t;
         ~Join() {
@@ -267,9 +302,8 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
         }
     } join{threads};
     QuitWorkers quit(channels.master());
-    bool dispatching = false;
-    return finish(
-        c, run_master(opt, c, channels.master(), {host_name()}, size, &dispatching, out, err));
+    MasterState state;
+    return finish(c, run_master(opt, c, channels.master(), {host_name()}, size, &state, out, err));
 }
 
 }  // namespace hopper::campaign

@@ -1,54 +1,138 @@
 #include "hopper/campaign/worker.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <exception>
+#include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 
 namespace hopper::campaign {
 
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Thrown by the progress hook when a stop was requested: it unwinds the realization at once
+// (the engine itself looks at the stop flag only every few hundred steps, which on a scene of
+// millions of particles is half a minute).
+struct Interrupted {};
+
+// A progress interval shorter than any time step: the engine calls the hook after every step.
+constexpr double every_step = 1e-12;
+
+Message error_reply(const Message& task, const std::string& what) {
+    Message reply = Message::make(MessageKind::error, task.task, task.attempt);
+    reply.payload.assign(what.begin(), what.end());
+    return reply;
+}
+
+// Runs one task on the calling thread; the reply to send (without its duration).
+Message run_task(const Message& m, const TaskRunner& run, const std::atomic<bool>& stop,
+                 std::atomic<std::uint64_t>& steps) {
+    engine::RunHooks hooks;
+    hooks.stop = &stop;
+    hooks.progress_interval = every_step;
+    hooks.on_progress = [&](const engine::Progress&) {
+        steps.fetch_add(1, std::memory_order_relaxed);
+        if (stop.load(std::memory_order_relaxed)) throw Interrupted{};
+    };
+    Message reply = Message::make(MessageKind::result, m.task, m.attempt);
+    try {
+        const engine::RealizationResult r = run(m.task, hooks);
+        // Stopped early: the engine ends it as failed ("interrupted"). A realization that
+        // finished before it saw the request is a result like any other.
+        if (stop && r.status == engine::Status::failed)
+            reply.kind = MessageKind::interrupted;
+        else
+            reply.payload = store::encode_result(r);
+    } catch (const Interrupted&) {
+        reply.kind = MessageKind::interrupted;
+    } catch (const std::exception& e) {
+        reply = error_reply(m, e.what());
+    } catch (...) {
+        reply = error_reply(m, "unknown exception");
+    }
+    return reply;
+}
+
+}  // namespace
+
+double heartbeat_interval_for(double worker_timeout) {
+    return std::clamp(worker_timeout / 4.0, 0.05, 10.0);
+}
+
 void run_worker(WorkerChannel& channel, const TaskRunner& run, WorkerOptions options) {
+    const auto beat = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(options.heartbeat_interval));
+    const auto watch = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(options.watch_interval));
     for (;;) {
         const Message m = channel.receive();
         if (m.kind == MessageKind::quit) return;
         if (m.kind != MessageKind::task) continue;  // a stop_now that came after the task ended
 
-        std::atomic<bool> stop{false};
+        // Shared with the computing thread, which may outlive this loop when told to quit while
+        // its realization hangs (it is then left behind, detached).
+        struct Shared {
+            std::atomic<bool> stop{false};
+            std::atomic<std::uint64_t> steps{0};
+            std::mutex mutex;
+            std::condition_variable done_cv;
+            bool done = false;
+            Message reply;
+        };
+        const auto sh = std::make_shared<Shared>();
+        const auto t0 = Clock::now();
+        std::thread compute([sh, m, &run] {
+            Message r = run_task(m, run, sh->stop, sh->steps);
+            {
+                std::lock_guard lock(sh->mutex);
+                sh->reply = std::move(r);
+                sh->done = true;
+            }
+            sh->done_cv.notify_one();
+        });
+        auto finished_within = [&](Clock::duration d) {
+            std::unique_lock lock(sh->mutex);
+            return sh->done_cv.wait_for(lock, d, [&] { return sh->done; });
+        };
         bool quit = false;
-        engine::RunHooks hooks;
-        hooks.stop = &stop;
-        hooks.progress_interval = options.poll_interval;
-        hooks.on_progress = [&](const engine::Progress&) {
+        std::uint64_t steps_at_beat = 0;
+        auto next_beat = t0 + beat;
+        while (!quit && !finished_within(watch)) {
             while (auto msg = channel.poll()) {
-                if (msg->kind == MessageKind::stop_now) stop = true;
+                if (msg->kind == MessageKind::stop_now) sh->stop = true;
                 if (msg->kind == MessageKind::quit) {
-                    stop = true;
+                    sh->stop = true;
                     quit = true;
                 }
             }
-        };
-        const auto t0 = std::chrono::steady_clock::now();
-        Message reply = Message::make(MessageKind::result, m.task, m.attempt);
-        try {
-            const engine::RealizationResult r = run(m.task, hooks);
-            // Stopped early: the engine ends it as failed ("interrupted"). A realization that
-            // finished before it saw the request is a result like any other.
-            if (stop && r.status == engine::Status::failed)
-                reply.kind = MessageKind::interrupted;
-            else
-                reply.payload = store::encode_result(r);
-        } catch (const std::exception& e) {
-            reply.kind = MessageKind::error;
-            const std::string what = e.what();
-            reply.payload.assign(what.begin(), what.end());
-        } catch (...) {
-            reply.kind = MessageKind::error;
-            const std::string what = "unknown exception";
-            reply.payload.assign(what.begin(), what.end());
+            // A heartbeat only while the realization advances: a computation that hangs goes
+            // silent like a stopped node.
+            if (options.heartbeat_interval > 0 && Clock::now() >= next_beat) {
+                const std::uint64_t now_steps = sh->steps.load(std::memory_order_relaxed);
+                if (now_steps != steps_at_beat)
+                    channel.send(Message::make(MessageKind::heartbeat, m.task, m.attempt));
+                steps_at_beat = now_steps;
+                next_beat = Clock::now() + beat;
+            }
         }
-        reply.seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (quit) return;
+        if (quit) {
+            // The master no longer listens. A realization stops at its next step; one that
+            // does not within a few seconds hangs and is left behind.
+            if (finished_within(std::chrono::seconds(5)))
+                compute.join();
+            else
+                compute.detach();
+            return;
+        }
+        compute.join();
+        Message reply = std::move(sh->reply);
+        reply.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         channel.send(reply);
     }
 }

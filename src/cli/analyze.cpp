@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -164,6 +165,35 @@ PointFields merge_point_fields(const AnalysisPointInput& in) {
     return pf;
 }
 
+namespace {
+bool out_of_realization_order(const AnalysisPointInput& in) {
+    return in.realizations.size() == in.results.size() &&
+           !std::is_sorted(in.realizations.begin(), in.realizations.end());
+}
+}  // namespace
+
+AnalysisPointInput in_realization_order(AnalysisPointInput in) {
+    if (!out_of_realization_order(in)) return in;
+    const std::size_t n = in.results.size();
+    std::vector<std::size_t> order(n);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+        return in.realizations[x] < in.realizations[y];
+    });
+    AnalysisPointInput out = std::move(in);
+    auto permute = [&order](auto& v) {
+        std::remove_reference_t<decltype(v)> sorted;
+        sorted.reserve(v.size());
+        for (std::size_t i : order)
+            sorted.push_back(std::move(v[i]));
+        v = std::move(sorted);
+    };
+    permute(out.results);
+    permute(out.realizations);
+    if (out.rows.size() == n) permute(out.rows);
+    return out;
+}
+
 Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
     Analysis a;
     a.rho_b_source = "estimate: rho_b = " + json_number(kAssumedPackingFraction) +
@@ -173,7 +203,11 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
     a.d_definition =
         "d = number-weighted mean diameter f_small d_small + (1 - f_small) d_large (scene)";
     std::map<std::string, int> group_index;
-    for (const auto& in : inputs) {
+    for (const auto& given : inputs) {
+        // Realization order, not storage order (a copy only when they differ).
+        std::optional<AnalysisPointInput> reordered;
+        if (out_of_realization_order(given)) reordered = in_realization_order(given);
+        const AnalysisPointInput& in = reordered ? *reordered : given;
         PointAnalysis p;
         p.label = in.label;
         p.D_cm = in.D_cm;
@@ -969,6 +1003,7 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
         if (it != index.end()) {
             inputs[it->second].results.push_back(std::move(r.result));
             inputs[it->second].rows.push_back(row);
+            inputs[it->second].realizations.push_back(r.record.realization);
         }
         ++row;
     }

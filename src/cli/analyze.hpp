@@ -40,10 +40,19 @@ struct AnalysisPointInput {
     // The row in /realizations of each result (same order); empty: rows unknown (messages then
     // give the index in `results`).
     std::vector<std::int64_t> rows;
+    // The realization index of each result (same order). When given, analyze_points() uses the
+    // results in ascending index, so that every statistic (sums, the bootstrap, the field merge)
+    // is the same whatever order the realizations were stored in (rank count, resumes).
+    std::vector<int> realizations;
 };
 
+// `in` with its results (and rows) in ascending realization index; unchanged when the indices
+// are not given. Stable: equal indices keep their order.
+AnalysisPointInput in_realization_order(AnalysisPointInput in);
+
 // A point's coarse-grained fields (issue 7): the pieces of its realizations that did not fail,
-// merged exactly (engine::FieldMoments::merge, in row order).
+// merged exactly (engine::FieldMoments::merge, in the order of `results`: analyze_points() puts
+// them in realization order first).
 struct PointFields {
     bool enabled = false;  // the point's scene samples fields, or a result has them
     std::optional<engine::FieldMoments> merged;  // absent: see reason

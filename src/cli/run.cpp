@@ -2,8 +2,10 @@
 #include "cli/parse.hpp"
 
 #include <boost/program_options.hpp>
+#include <chrono>
 #include <cstdlib>
 #include <iostream>
+#include <thread>
 
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
@@ -37,6 +39,14 @@ po::options_description run_options() {
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
+        ("no-file-locking",
+         "for file systems without locks (NFS without a lock daemon, Lustre without flock): "
+         "write the store without the journal's lock and with HDF5's file locking off "
+         "(HDF5_USE_FILE_LOCKING=FALSE). Then nothing keeps two runs from writing one store: "
+         "make sure only one runs at a time")  //
+        ("worker-timeout", po::value<std::string>()->value_name("S"),
+         "seconds a busy worker may send no heartbeat before its realization is handed to "
+         "another worker (default: 5 x the realization's expected duration, at least 300)")  //
         ("help,h", "show this help");
     return d;
 }
@@ -51,7 +61,8 @@ double non_negative(const char* option, const std::string& text) {
 
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
-          "                    [--threads N] [--flush-interval S]\n"
+          "                    [--threads N] [--flush-interval S] [--worker-timeout S]\n"
+          "                    [--no-file-locking]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
@@ -88,6 +99,20 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     if (vm.count("flush-interval"))
         opt.store_options.flush_interval =
             non_negative("--flush-interval", vm["flush-interval"].as<std::string>());
+    if (vm.count("no-file-locking")) {
+        opt.store_options.require_lock = false;
+        // HDF5's own switch, read when the library starts (no HDF5 call has been made yet);
+        // every rank parses the same command line, so every rank sets it.
+        ::setenv("HDF5_USE_FILE_LOCKING", "FALSE", 1);
+    }
+    if (vm.count("worker-timeout")) {
+        const std::string& t = vm["worker-timeout"].as<std::string>();
+        const double v = parse_finite("--worker-timeout", t);
+        if (!(v >= 0.2))
+            throw core::ConfigError("--worker-timeout must be at least 0.2 (seconds), got '" + t +
+                                    "'");
+        opt.master.worker_timeout = v;
+    }
     if (vm.count("threads")) {
         const std::string& t = vm["threads"].as<std::string>();
         const std::uint64_t n = parse_seed("--threads", t);
@@ -105,6 +130,18 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         opt.store_options.crash_point = c.substr(0, colon);
         opt.store_options.crash_after =
             static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
+    }
+    // Test hook (not for users): HOPPER_STORE_PAUSE=journal_link:<ms> pauses a run that creates
+    // a new store's journal before linking it into place (the race of two runs on a new store).
+    if (const char* pause = std::getenv("HOPPER_STORE_PAUSE")) {
+        const std::string c = pause;
+        const std::string prefix = "journal_link:";
+        if (c.rfind(prefix, 0) != 0)
+            throw core::ConfigError("HOPPER_STORE_PAUSE must be journal_link:<ms>, got '" + c +
+                                    "'");
+        const auto ms =
+            std::chrono::milliseconds(parse_seed("HOPPER_STORE_PAUSE", c.substr(prefix.size())));
+        opt.store_options.before_journal_link = [ms] { std::this_thread::sleep_for(ms); };
     }
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;

@@ -400,6 +400,55 @@ struct PointDraft {
     std::string origin;  // for messages: "[sweep] combination 3", "[[points]] #2 (line 40)"
 };
 
+namespace {
+// An integer too large for TOML (64-bit signed) is a syntax error to toml++, which names neither
+// the key nor what is allowed ("seed = 2^64"). This finds the key on the error's line (and its
+// section) and says both. Empty when the error is something else.
+std::optional<std::string> integer_overflow_message(std::string_view text, int line,
+                                                    std::string_view description) {
+    if (description.find("not representable in 64 bits") == std::string_view::npos)
+        return std::nullopt;
+    std::string section, key, value;
+    int n = 1;
+    for (std::size_t pos = 0; pos <= text.size() && n <= line; ++n) {
+        const std::size_t end = std::min(text.find('\n', pos), text.size());
+        std::string_view l = text.substr(pos, end - pos);
+        pos = end + 1;
+        const auto first = l.find_first_not_of(" \t");
+        if (first == std::string_view::npos) continue;
+        l.remove_prefix(first);
+        if (l.front() == '[') {
+            const auto close = l.find(']');
+            if (close != std::string_view::npos)
+                section = std::string(
+                    l.substr(l.find_first_not_of('['), close - l.find_first_not_of('[')));
+        } else if (n == line && l.find('=') != std::string_view::npos) {
+            std::string_view k = l.substr(0, l.find('='));
+            std::string_view v = l.substr(l.find('=') + 1);
+            k = k.substr(0, k.find_last_not_of(" \t") + 1);
+            v.remove_prefix(std::min(v.size(), v.find_first_not_of(" \t")));
+            v = v.substr(0, v.find_first_of(" \t#,]}"));
+            key = std::string(k);
+            value = std::string(v);
+        }
+    }
+    if (key.empty()) return std::nullopt;
+    const std::string full = section.empty() ? key : section + "." + key;
+    constexpr auto max_int = std::numeric_limits<std::int64_t>::max();
+    if (full == "campaign.seed")
+        return "campaign.seed = " + clip(value) + " is out of range: allowed [0, " +
+               std::to_string(max_int) + "] (TOML integers are 64-bit signed)";
+    const KeyDef* d = find_name(full);
+    if (!d) d = find_name(key);
+    if (d)
+        return std::string(d->name) + " = " + clip(value) + " is out of range: allowed " +
+               range_text(*d);
+    return clip(full) + " = " + clip(value) + " is not a 64-bit integer (TOML integers are in [" +
+           std::to_string(std::numeric_limits<std::int64_t>::min()) + ", " +
+           std::to_string(max_int) + "])";
+}
+}  // namespace
+
 class Parser {
   public:
     Parser(std::string_view text, fs::path source) : text_(text), path_(std::move(source)) {
@@ -488,8 +537,11 @@ toml::table Parser::parse_toml() const {
         return toml::parse(text_, file_);
     } catch (const toml::parse_error& e) {
         const auto& b = e.source().begin;
-        throw ConfigError(file_ + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) +
-                          ": TOML syntax error: " + std::string(e.description()));
+        const std::string at =
+            file_ + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": ";
+        if (auto msg = integer_overflow_message(text_, static_cast<int>(b.line), e.description()))
+            throw ConfigError(at + *msg);
+        throw ConfigError(at + "TOML syntax error: " + std::string(e.description()));
     }
 }
 
@@ -790,6 +842,11 @@ SceneParams Parser::build_scene(const std::vector<Given>& overrides,
     if (!merged.count("walls.e_n")) p.material.wall.e_n = p.material.system.e_n;
     if (!merged.count("walls.mu")) p.material.wall.mu = p.material.system.mu;
     if (!merged.count("walls.particle_diameter_cm")) p.hopper.wall_diameter = p.particles.d_large;
+    // The base scene without a D_cm in [hopper]: the built-in default outlet is never used
+    // (every point and `campaign simulate --D` give theirs), so a hopper narrower than it must
+    // not be refused for it. It stands at half the width here.
+    if (context.empty() && !merged.count("D_cm") && !(p.hopper.outlet < p.hopper.width))
+        p.hopper.outlet = 0.5 * p.hopper.width;
 
     const std::string where = context.empty() ? "" : context + ": ";
     auto in_cm = [](double m) { return approx_number(m / cm); };

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -11,6 +12,7 @@
 #include "hopper/core/error.hpp"
 #include "hopper/store/store.hpp"
 #include "layout.hpp"
+#include "state.hpp"
 
 namespace fs = std::filesystem;
 
@@ -123,30 +125,62 @@ void write_group(const h5::Id& parent, const DerivedGroup& g) {
 void write_derived_group(const fs::path& store, const DerivedGroup& group) {
     validate(group, "/");
     h5::quiet_errors();
-    const StoreStatus status = read_status(store);
-    if (status.writer_active)
+    // The journal's lock for the time of the change: no run writes the store meanwhile, and the
+    // file's new checksum is recorded in a sync record of its own. A file system without locks
+    // is accepted here (analysis does not race runs the way two runs race each other).
+    State state;
+    JournalScan scan;
+    std::optional<Journal> journal;
+    try {
+        journal.emplace(Journal::open(
+            journal_path(store),
+            [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+                apply_record(state, t, off, p, nullptr);
+            },
+            scan, JournalOptions{.require_lock = false, .before_link = {}}));
+    } catch (const core::StoreError& e) {
+        if (std::string(e.what()).find("is in use by another") == std::string::npos) throw;
         throw core::StoreError("'" + store.string() +
                                "' is in use by a `campaign run`; analyze it when the run has "
                                "ended (the analysis is written at the end of every run)");
-    const layout::Inspection in = layout::inspect(store);
-    if (!status.hdf5_in_step || !in.readable || !in.consistent)
-        throw core::StoreError("the HDF5 file '" + store.string() +
-                               "' is not in step with its journal" +
-                               (in.problem.empty() ? std::string() : " (" + in.problem + ")") +
-                               "; run `campaign run` on it once to rebuild it, then analyze again");
+    }
+    const FileCheck file_check = check_closed_file(state, store);
+    const layout::Inspection in = file_check == FileCheck::changed || !state.closed_in_step()
+                                      ? layout::Inspection{}
+                                      : layout::inspect(store);
+    if (!state.closed_in_step() || file_check == FileCheck::changed ||
+        file_check == FileCheck::other || !in.readable || !in.consistent ||
+        in.token != state.last_sync->token || in.journal_bytes != state.last_offset)
+        throw core::StoreError(
+            "the HDF5 file '" + store.string() + "' is not in step with its journal" +
+            (file_check == FileCheck::changed
+                 ? std::string(" (it does not match the checksum recorded when it was closed)")
+             : in.problem.empty() ? std::string()
+                                  : " (" + in.problem + ")") +
+            "; run `campaign run` on it once to rebuild it, then analyze again");
 
-    h5::Id file = h5::open_file(store, true);
-    // Not consistent while the group is replaced: a kill in between leaves a file the next run
-    // rebuilds from the journal instead of one that looks in step.
-    h5::set_attr(file, "consistent", std::int64_t{0});
-    h5::flush(file);
-    if (h5::exists(file, group.name))
-        h5::check_status(H5Ldelete(file.get(), group.name.c_str(), H5P_DEFAULT),
-                         "cannot delete the previous group '/" + group.name + "'");
-    write_group(file, group);
-    h5::flush(file);
-    h5::set_attr(file, "consistent", std::int64_t{1});
-    h5::close_file(file);
+    const std::uint64_t at = journal->size();  // where the new sync record goes
+    {
+        h5::Id file = h5::open_file(store, true);
+        // Not consistent while the group is replaced: a kill in between leaves a file the next
+        // run rebuilds from the journal instead of one that looks in step. So does a kill
+        // before the sync record below (the file names a journal length not yet synced).
+        h5::set_attr(file, "consistent", std::int64_t{0});
+        h5::flush(file);
+        if (h5::exists(file, group.name))
+            h5::check_status(H5Ldelete(file.get(), group.name.c_str(), H5P_DEFAULT),
+                             "cannot delete the previous group '/" + group.name + "'");
+        write_group(file, group);
+        h5::flush(file);
+        h5::set_attr_u64(file, "journal_bytes", at);
+        h5::set_attr(file, "consistent", std::int64_t{1});
+        h5::close_file(file);
+    }
+    fsync_path(store);
+    SyncRecord sync = *state.last_sync;
+    sync.journal_bytes = at;
+    sync.file = checksum_file(store);
+    journal->append(RecordType::sync, encode(sync));
 }
 
 std::vector<std::string> derived_group_members(const fs::path& store, const std::string& name) {

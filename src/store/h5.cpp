@@ -28,6 +28,14 @@ herr_t collect_error(unsigned n, const H5E_error2_t* e, void* data) {
         msg += ": " + stack.front();
         if (stack.size() > 1) msg += " <- " + stack.back();
     }
+    for (const auto& line : stack)
+        if (line.find("unable to lock file") != std::string::npos) {
+            msg +=
+                ". The file system does not support HDF5's file locks (NFS without a lock "
+                "daemon, Lustre without flock): run with HDF5_USE_FILE_LOCKING=FALSE in the "
+                "environment (`campaign run --no-file-locking` sets it)";
+            break;
+        }
     throw core::StoreError(msg);
 }
 
@@ -62,6 +70,10 @@ std::optional<T> get_numeric_attr(const Id& loc, const std::string& name, hid_t 
 }  // namespace
 
 void quiet_errors() {
+    // No cleanup at exit: every file is closed explicitly, and HDF5 1.10's own cleanup crashes
+    // (H5D_close) on a file whose writes failed, e.g. on a full disk (issue 14, item 2). Only
+    // effective before the library's first use, so this is the first call of every entry point.
+    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
 }
 

@@ -15,7 +15,8 @@
 
 namespace hopper::store::h5 {
 
-// Switches off HDF5's automatic error printing (errors become exceptions instead).
+// Switches off HDF5's automatic error printing (errors become exceptions instead) and its
+// cleanup at exit (which crashes after failed writes). Called before any other HDF5 call.
 void quiet_errors();
 
 // Throws core::StoreError("<what>: <HDF5 error stack>") when `r` is negative.

@@ -6,7 +6,9 @@
 
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -220,7 +222,7 @@ Journal::~Journal() {
     if (fd_ >= 0) ::close(fd_);  // releases the lock
 }
 
-void Journal::lock_or_throw() {
+void Journal::lock_or_throw(bool require_lock) {
     // An open-file-description lock (Linux): it conflicts within one process too, and closing
     // another descriptor of the file does not release it.
     struct flock fl = whole_file_lock(F_WRLCK);
@@ -228,54 +230,113 @@ void Journal::lock_or_throw() {
         locked_ = true;
         return;
     }
-    if (errno == EACCES || errno == EAGAIN) {
+    const int err = errno;
+    if (err == EACCES || err == EAGAIN) {
         ::close(fd_);
         fd_ = -1;
         throw core::StoreError("the store's journal '" + path_.string() +
                                "' is in use by another `campaign run`; wait for it to finish "
                                "or stop it first");
     }
-    locked_ = false;  // ENOLCK / EINVAL: the file system has no locks; go on unprotected
+    locked_ = false;
+    if (!require_lock) return;  // the caller accepted a file system without locks
+    ::close(fd_);
+    fd_ = -1;
+    throw core::StoreError(
+        "cannot lock the store's journal '" + path_.string() + "': " + std::strerror(err) +
+        ". The file system does not support locks (NFS without a lock daemon, Lustre mounted "
+        "without flock); they are what keeps two `campaign run` from writing one store. Use a "
+        "file system with locks for the store, or make sure only one run uses it at a time and "
+        "run with --no-file-locking (which also turns HDF5's file locking off)");
 }
 
-Journal Journal::create(const fs::path& path) {
-    // Written under a temporary name and linked into place complete, so that a reader never
-    // sees a journal without its header, and two runs cannot both create it.
+Journal Journal::create(const fs::path& path, const JournalOptions& options) {
+    // Written under a name private to this call and linked into place complete, so that a
+    // reader never sees a journal without its header and two runs cannot both create it. The
+    // private name matters: a shared one ("<journal>.new") let one run unlink the other's file
+    // before it was linked, leaving the other writing every record to a deleted file.
+    std::random_device rd;
+    char suffix[48];
+    std::snprintf(suffix, sizeof suffix, ".new.%ld.%08x", static_cast<long>(::getpid()), rd());
     fs::path tmp = path;
-    tmp += ".new";
-    ::unlink(tmp.c_str());
+    tmp += suffix;
     const int fd = ::open(tmp.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) fail_errno("cannot create the journal", tmp);
+    struct Unlink {  // the private name goes whatever happens
+        const fs::path& p;
+        ~Unlink() { ::unlink(p.c_str()); }
+    } unlink_tmp{tmp};
     Journal j(path, fd, 0, false);
-    j.lock_or_throw();
+    j.lock_or_throw(options.require_lock);
     std::uint8_t header[journal_header_size] = {};
     std::memcpy(header, header_magic, sizeof header_magic);
     header[14] = static_cast<std::uint8_t>(journal_version & 0xff);
     header[15] = static_cast<std::uint8_t>(journal_version >> 8);
     write_all(fd, header, sizeof header, 0, tmp);
     if (::fsync(fd) != 0) fail_errno("cannot sync the journal", tmp);
+    if (options.before_link) options.before_link();
     if (::link(tmp.c_str(), path.c_str()) != 0) {
-        const int err = errno;
-        if (err == EEXIST) {
-            ::unlink(tmp.c_str());
-            errno = err;
-            fail_errno("cannot create the journal", path);
+        if (errno == EEXIST) fail_errno("cannot create the journal", path);
+        if (errno != EPERM && errno != ENOTSUP && errno != EOPNOTSUPP && errno != ENOSYS)
+            fail_errno("cannot link the new journal into place as", path);
+        // A file system without hard links: a rename that refuses to replace; where even that
+        // is missing, the final name created exclusively (a reader may then briefly see a
+        // journal shorter than its header).
+        if (::renameat2(AT_FDCWD, tmp.c_str(), AT_FDCWD, path.c_str(), RENAME_NOREPLACE) != 0) {
+            if (errno == EEXIST) fail_errno("cannot create the journal", path);
+            const int direct = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+            if (direct < 0) fail_errno("cannot create the journal", path);
+            Journal d(path, direct, 0, false);
+            d.lock_or_throw(options.require_lock);
+            write_all(direct, header, sizeof header, 0, path);
+            if (::fsync(direct) != 0) fail_errno("cannot sync the journal", path);
+            j = std::move(d);
         }
-        // File systems without hard links: a rename (not exclusive, but still complete).
-        if (::rename(tmp.c_str(), path.c_str()) != 0) fail_errno("cannot create the journal", path);
-    } else {
-        ::unlink(tmp.c_str());
     }
     sync_directory(path);
     j.size_ = journal_header_size;
+    j.check_still_in_place();
     return j;
 }
 
-Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalScan& scan) {
+Journal Journal::open_or_create(const fs::path& path, const RecordVisitor& visit, JournalScan& scan,
+                                bool& created, const JournalOptions& options) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0 && errno == ENOENT) {
+        try {
+            Journal j = create(path, options);
+            created = true;
+            scan = JournalScan{journal_header_size, journal_header_size, 0};
+            return j;
+        } catch (const core::StoreError&) {
+            // Another run created it between our look and our link: use theirs.
+            if (::stat(path.c_str(), &st) != 0) throw;
+        }
+    }
+    created = false;
+    return open(path, visit, scan, options);
+}
+
+void Journal::check_still_in_place() const {
+    struct stat mine {
+    }, there{};
+    if (::fstat(fd_, &mine) != 0) fail_errno("cannot stat the journal", path_);
+    const bool same = ::stat(path_.c_str(), &there) == 0 && there.st_dev == mine.st_dev &&
+                      there.st_ino == mine.st_ino;
+    if (!same)
+        throw core::StoreError(
+            "the store's journal '" + path_.string() +
+            "' was deleted or replaced while this `campaign run` was writing it; what this run "
+            "recorded since is not in the journal at that path. Stop every other program using "
+            "the store, then run the same command again: it resumes from what the journal holds");
+}
+
+Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalScan& scan,
+                      const JournalOptions& options) {
     const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
     if (fd < 0) fail_errno("cannot open the journal", path);
     Journal j(path, fd, 0, false);
-    j.lock_or_throw();
+    j.lock_or_throw(options.require_lock);
     scan = scan_fd(fd, path, visit);
     if (scan.valid_bytes < scan.file_bytes) {
         if (::ftruncate(fd, static_cast<off_t>(scan.valid_bytes)) != 0)
@@ -304,9 +365,19 @@ std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> pay
     }
     if (crash_countdown_ > 0) --crash_countdown_;
     const std::uint64_t at = size_;
-    write_all(fd_, rec.data(), rec.size(), at, path_);
-    if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+    try {
+        write_all(fd_, rec.data(), rec.size(), at, path_);
+        if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+    } catch (const core::StoreError& e) {
+        // A full disk or a quota: take the partial record back (best effort; a torn tail is
+        // dropped by the next run anyway) and say what it means.
+        if (::ftruncate(fd_, static_cast<off_t>(at)) == 0) ::fdatasync(fd_);
+        throw core::StoreError(std::string(e.what()) +
+                               "; this record was not written (every earlier one is safe): make "
+                               "room and run the same command again to resume");
+    }
     size_ += rec.size();
+    check_still_in_place();
     return at;
 }
 

@@ -1,8 +1,16 @@
 #include "hopper/store/records.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <ctime>
+#include <vector>
+
+#include "hopper/core/error.hpp"
 
 namespace hopper::store {
 
@@ -186,6 +194,10 @@ Bytes encode(const SyncRecord& r) {
     w.u64(r.token);
     w.u64(r.journal_bytes);
     w.u64(r.rows);
+    if (r.file) {
+        w.u64(r.file->bytes);
+        w.u32(r.file->crc32c);
+    }
     return w.take();
 }
 
@@ -195,8 +207,37 @@ SyncRecord decode_sync(std::span<const std::uint8_t> b) {
     r.token = in.u64();
     r.journal_bytes = in.u64();
     r.rows = in.u64();
+    if (in.remaining() > 0) {  // written since checksums were added
+        FileChecksum f;
+        f.bytes = in.u64();
+        f.crc32c = in.u32();
+        r.file = f;
+    }
     in.expect_end();
     return r;
+}
+
+FileChecksum checksum_file(const std::filesystem::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        throw core::StoreError("cannot read '" + path.string() + "': " + std::strerror(errno));
+    FileChecksum f;
+    std::vector<std::uint8_t> buf(1 << 20);
+    for (;;) {
+        const ssize_t n = ::read(fd, buf.data(), buf.size());
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+            const int err = errno;
+            ::close(fd);
+            throw core::StoreError("cannot read '" + path.string() + "': " + std::strerror(err));
+        }
+        if (n == 0) break;
+        f.crc32c = crc32c(std::span<const std::uint8_t>(buf.data(), static_cast<std::size_t>(n)),
+                          f.crc32c);
+        f.bytes += static_cast<std::uint64_t>(n);
+    }
+    ::close(fd);
+    return f;
 }
 
 std::string utc_now() {

@@ -1,5 +1,8 @@
 #include "state.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include "hopper/core/error.hpp"
 
 namespace hopper::store {
@@ -32,6 +35,30 @@ ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& 
     s.rank = rec.rank;
     s.task_seconds = rec.task_seconds;
     return s;
+}
+
+bool State::closed_in_step() const {
+    return last_type == RecordType::sync && last_sync && last_sync->journal_bytes == last_offset &&
+           last_sync->rows == static_cast<std::uint64_t>(rows);
+}
+
+void fsync_path(const std::filesystem::path& p, bool directory) {
+    const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | (directory ? O_DIRECTORY : 0));
+    if (fd < 0) return;
+    ::fsync(fd);
+    ::close(fd);
+}
+
+FileCheck check_closed_file(const State& state, const std::filesystem::path& path) {
+    if (!state.closed_in_step() || !state.last_sync->file) return FileCheck::unrecorded;
+    const FileChecksum& want = *state.last_sync->file;
+    try {
+        const FileChecksum now = checksum_file(path);
+        if (now == want) return FileCheck::intact;
+        return now.bytes == want.bytes ? FileCheck::changed : FileCheck::other;
+    } catch (const core::StoreError&) {
+        return FileCheck::other;
+    }
 }
 
 int State::find_point(const std::string& label) const {

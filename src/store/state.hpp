@@ -4,6 +4,7 @@
 // HDF5 layout (layout.hpp) is written from it.
 
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -37,10 +38,24 @@ struct State {
     int apply(const ErrorRecord& r);
     void apply(const RunEndRecord& r);
 
+    // Whether the HDF5 file was closed in step with the journal, judged from the journal alone:
+    // the last record is a sync record written right after the file was closed at that length.
+    bool closed_in_step() const;
     int find_point(const std::string& label) const;
     std::uint64_t seed_of(int point, int realization) const;
     StoreStatus status() const;
 };
+
+// fsync of a file or directory, best effort (some file systems refuse it for directories).
+void fsync_path(const std::filesystem::path& p, bool directory = false);
+
+// The HDF5 file at `path` against the checksum in the state's last sync record (read without
+// HDF5). unrecorded: not closed in step, or a sync record from before checksums; changed: bytes
+// differ at the recorded size (damage in place since the close); other: another size or
+// unreadable (opening it tells what it is: a foreign file put there is refused, not
+// overwritten).
+enum class FileCheck { unrecorded, intact, changed, other };
+FileCheck check_closed_file(const State& state, const std::filesystem::path& path);
 
 ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& rec);
 

@@ -25,13 +25,6 @@ fs::path journal_path(const fs::path& store) {
 
 namespace {
 
-void fsync_path(const fs::path& p, bool directory = false) {
-    const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | (directory ? O_DIRECTORY : 0));
-    if (fd < 0) return;
-    ::fsync(fd);
-    ::close(fd);
-}
-
 // Whether `p` exists; false only when it does not (or a directory on its way is missing). Any
 // other failure to look (a symlink loop, no permission) is a StoreError naming the path, not a
 // missing file.
@@ -44,16 +37,18 @@ bool exists_or_throw(const fs::path& p, const char* what) {
     return fs::exists(st);
 }
 
-fs::path parent_or_dot(const fs::path& p) {
-    return p.parent_path().empty() ? fs::path(".") : p.parent_path();
+// A directory where a store file belongs is a mistake in the command line, not a damaged store.
+void refuse_directory(const fs::path& p, const char* what) {
+    std::error_code ec;
+    if (fs::is_directory(p, ec))
+        throw core::StoreError(std::string(what) + " '" + p.string() +
+                               "' is a directory; a store is named by the path of its HDF5 file "
+                               "(--store PATH), e.g. '" +
+                               (p / "store.h5").string() + "'");
 }
 
-// Whether the HDF5 file was closed in step with the journal, judged from the journal alone:
-// the last record is a sync record written right after the file was closed at that length.
-bool journal_says_in_step(const State& s) {
-    return s.last_type == RecordType::sync && s.last_sync &&
-           s.last_sync->journal_bytes == s.last_offset &&
-           s.last_sync->rows == static_cast<std::uint64_t>(s.rows);
+fs::path parent_or_dot(const fs::path& p) {
+    return p.parent_path().empty() ? fs::path(".") : p.parent_path();
 }
 
 // Replays records into a state and an HDF5 writer (rebuild).
@@ -123,6 +118,21 @@ struct Store::Impl {
         fsync_path(parent_or_dot(path), true);
     }
 
+    // Runs an update of the HDF5 view. Its failure (a full disk, a quota) is reported with what
+    // it means: the journal already holds everything, the view is rebuilt by the next run.
+    template <class F>
+    void update_view(F&& update) {
+        try {
+            update();
+        } catch (const core::StoreError& e) {
+            throw core::StoreError(
+                std::string(e.what()) + "\n  What this run finished is safe in the journal '" +
+                jpath.string() +
+                "'. Make room (or move the store with its journal) and run the "
+                "same command again: it resumes, and rebuilds the HDF5 file from the journal");
+        }
+    }
+
     void maybe_flush() {
         const auto now = std::chrono::steady_clock::now();
         if (opt.flush_interval <= 0.0 ||
@@ -144,64 +154,83 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
     m.opt = std::move(options);
     h5::quiet_errors();
     std::error_code ec;
+    refuse_directory(path, "the store");
+    refuse_directory(m.jpath, "the store's journal");
     const bool have_journal = exists_or_throw(m.jpath, "the store's journal");
     const bool have_h5 = exists_or_throw(path, "the store file");
-    if (!have_journal) {
-        if (have_h5) {
-            const layout::Inspection in = layout::inspect(path);
-            if (in.readable)
-                throw core::StoreError(
-                    m.where() + " has no journal '" + m.jpath.string() +
-                    "': the journal is the record of what finished and must stay beside the "
-                    "store; restore it, or use another --store path (the .h5 file alone can "
-                    "still be read for analysis)");
-            throw core::StoreError(m.where() + " exists and is not a hopper store (" + in.problem +
-                                   "); use another --store path or move the file away");
-        }
-        fs::create_directories(parent_or_dot(path), ec);
-        m.journal.emplace(Journal::create(m.jpath));
-        m.is_new = true;
-    } else {
-        JournalScan scan;
-        m.journal.emplace(Journal::open(
-            m.jpath,
-            [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
-                apply_record(m.state, t, off, p, nullptr);
-            },
-            scan));
-        if (scan.torn_bytes() > 0)
-            m.notes.push_back("dropped an incomplete last journal record (" +
-                              std::to_string(scan.torn_bytes()) +
-                              " bytes, from an interrupted write); its realization runs again");
-        if (m.state.duplicates > 0)
-            m.notes.push_back("the journal holds " + std::to_string(m.state.duplicates) +
-                              " duplicate results; the first of each is kept");
-        m.is_new = m.state.runs.empty();
-        if (have_h5) {
-            const layout::Inspection in = layout::inspect(path);
-            if (in.foreign)
-                throw core::StoreError(m.where() + " is not a hopper store (" + in.problem +
-                                       ") although its journal '" + m.jpath.string() +
-                                       "' is; move the file away so that it can be rebuilt from "
-                                       "the journal");
-            m.h5_in_step = in.readable && in.consistent && journal_says_in_step(m.state) &&
-                           in.token == m.state.last_sync->token &&
-                           in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
-            if (!m.h5_in_step && !m.is_new)
-                m.notes.push_back(
-                    in.readable ? "the HDF5 file is not in step with the journal (the last run "
-                                  "did not close it); rebuilding it from the journal"
-                                : "the HDF5 file is damaged (" + in.problem +
-                                      "); rebuilding it from the journal");
-        } else if (!m.is_new) {
-            m.notes.push_back("the HDF5 file is missing; rebuilding it from the journal");
-        }
+    if (!have_journal && have_h5) {
+        const layout::Inspection in = layout::inspect(path);
+        if (in.readable)
+            throw core::StoreError(
+                m.where() + " has no journal '" + m.jpath.string() +
+                "': the journal is the record of what finished and must stay beside the "
+                "store; restore it, or use another --store path (the .h5 file alone can "
+                "still be read for analysis)");
+        throw core::StoreError(m.where() + " exists and is not a hopper store (" + in.problem +
+                               "); use another --store path or move the file away");
+    }
+    if (!have_journal) fs::create_directories(parent_or_dot(path), ec);
+    // Opens the journal, or creates it; a run that loses the race to create it opens the
+    // winner's (and finds it locked).
+    JournalScan scan;
+    bool created = false;
+    m.journal.emplace(Journal::open_or_create(
+        m.jpath,
+        [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+            apply_record(m.state, t, off, p, nullptr);
+        },
+        scan, created, JournalOptions{m.opt.require_lock, m.opt.before_journal_link}));
+    if (scan.torn_bytes() > 0)
+        m.notes.push_back("dropped an incomplete last journal record (" +
+                          std::to_string(scan.torn_bytes()) +
+                          " bytes, from an interrupted write); its realization runs again");
+    if (m.state.duplicates > 0)
+        m.notes.push_back("the journal holds " + std::to_string(m.state.duplicates) +
+                          " duplicate results; the first of each is kept");
+    m.is_new = m.state.runs.empty();
+    const bool have_file = !created && exists_or_throw(path, "the store file");
+    // A file closed in step whose checksum no longer matches was damaged afterwards: it is
+    // rebuilt from the journal without being opened (damage can make HDF5 crash or loop).
+    const FileCheck file_check =
+        have_file ? check_closed_file(m.state, path) : FileCheck::unrecorded;
+    if (file_check == FileCheck::changed) {
+        m.notes.push_back(
+            "the HDF5 file does not match the checksum recorded when it was closed "
+            "(damaged since); rebuilding it from the journal without opening it");
+    } else if (have_file) {
+        const layout::Inspection in = layout::inspect(path);
+        if (in.foreign)
+            throw core::StoreError(m.where() + " is not a hopper store (" + in.problem +
+                                   ") although its journal '" + m.jpath.string() +
+                                   "' is; move the file away so that it can be rebuilt from "
+                                   "the journal");
+        // The HDF5 file is written after the journal, so it never holds more than the journal
+        // knows -- unless the journal was replaced. Rebuilding would then destroy results.
+        if (in.readable && in.rows > m.state.rows)
+            throw core::StoreError(
+                m.where() + " holds " + std::to_string(in.rows) +
+                " realizations but its journal '" + m.jpath.string() + "' knows only " +
+                std::to_string(m.state.rows) +
+                ": the journal is not the one this file was written with (replaced or recreated?); "
+                "nothing was changed. Restore the original journal, or move the .h5 file away to "
+                "start from the journal");
+        m.h5_in_step = in.readable && in.consistent && m.state.closed_in_step() &&
+                       file_check != FileCheck::other && in.token == m.state.last_sync->token &&
+                       in.journal_bytes == m.state.last_offset && in.rows == m.state.rows;
+        if (!m.h5_in_step && !m.is_new)
+            m.notes.push_back(in.readable
+                                  ? "the HDF5 file is not in step with the journal (the last run "
+                                    "did not close it); rebuilding it from the journal"
+                                  : "the HDF5 file is damaged (" + in.problem +
+                                        "); rebuilding it from the journal");
+    } else if (!m.is_new) {
+        m.notes.push_back("the HDF5 file is missing; rebuilding it from the journal");
     }
     if (m.opt.crash_point == "journal") m.journal->crash_after_appends(m.opt.crash_after - 1);
     if (!m.journal->locked())
         m.notes.push_back(
-            "the file system does not support locks: nothing prevents two runs "
-            "from writing this store at once");
+            "the file system does not support locks (--no-file-locking): nothing prevents two "
+            "runs from writing this store at once");
 }
 
 Store::~Store() {
@@ -285,8 +314,10 @@ void Store::append(const ResultRecord& r) {
     m.journal->append(RecordType::result, encode(r));
     const std::int64_t row = m.state.apply(r, res);
     m.state.last_type = RecordType::result;
-    if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
-    m.maybe_flush();
+    m.update_view([&] {
+        if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
+        m.maybe_flush();
+    });
 }
 
 void Store::append(const ErrorRecord& r) {
@@ -297,8 +328,10 @@ void Store::append(const ErrorRecord& r) {
     m.journal->append(RecordType::error, encode(r));
     const int p = m.state.apply(r);
     m.state.last_type = RecordType::error;
-    m.writer->error(m.state, p, r);
-    m.maybe_flush();
+    m.update_view([&] {
+        m.writer->error(m.state, p, r);
+        m.maybe_flush();
+    });
 }
 
 void Store::end_run(const RunEndRecord& r) {
@@ -306,15 +339,17 @@ void Store::end_run(const RunEndRecord& r) {
     if (!m.run_open) throw core::StoreError("internal: end_run() outside a run");
     m.journal->append(RecordType::run_end, encode(r));
     m.state.apply(r);
-    m.writer->run_end(m.state);
     std::random_device rd;
     const std::uint64_t token = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ 1u;
     const std::uint64_t at = m.journal->size();
-    m.writer->close(m.state, token, at);
+    m.update_view([&] {
+        m.writer->run_end(m.state);
+        m.writer->close(m.state, token, at);
+    });
     m.writer.reset();
     fsync_path(m.path);
     m.crash_point("close");
-    SyncRecord sync{token, at, static_cast<std::uint64_t>(m.state.rows)};
+    SyncRecord sync{token, at, static_cast<std::uint64_t>(m.state.rows), checksum_file(m.path)};
     m.journal->append(RecordType::sync, encode(sync));
     m.state.last_sync = sync;
     m.state.last_type = RecordType::sync;
@@ -326,6 +361,7 @@ void Store::end_run(const RunEndRecord& r) {
 StoreStatus read_status(const fs::path& store) {
     const fs::path jpath = journal_path(store);
     std::error_code ec;
+    refuse_directory(store, "the store");
     if (!exists_or_throw(jpath, "the store's journal")) {
         if (!exists_or_throw(store, "the store file"))
             throw core::StoreError("no store at '" + store.string() + "' (neither the file nor " +
@@ -344,7 +380,7 @@ StoreStatus read_status(const fs::path& store) {
     StoreStatus s = state.status();
     s.store = store;
     s.writer_active = journal_locked(jpath);
-    s.hdf5_in_step = !s.writer_active && journal_says_in_step(state) && fs::exists(store, ec);
+    s.hdf5_in_step = !s.writer_active && state.closed_in_step() && fs::exists(store, ec);
     s.journal_bytes = scan.valid_bytes;
     s.torn_bytes = scan.torn_bytes();
     return s;

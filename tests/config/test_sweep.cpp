@@ -883,3 +883,33 @@ TEST(SweepLoad, LoadKeepsPathAndText) {
     EXPECT_THAT(load_error_of(file), HasSubstr(file.string() + ":2:6: material.mu = 20"));
     fs::remove_all(dir);
 }
+
+// Issue 14, item 5: an integer beyond 64 bits was a bare TOML syntax error naming neither the
+// key nor the range.
+TEST(SweepParse, AnIntegerBeyond64BitsNamesTheKeyAndTheRange) {
+    const std::string campaign = "[campaign]\nname = \"x\"\nrealizations = 1\n";
+    EXPECT_THAT(error_of(campaign + "seed = 18446744073709551616\n"),
+                HasSubstr("bad.toml:4:28: campaign.seed = 18446744073709551616 is out of range: "
+                          "allowed [0, 9223372036854775807]"));
+    EXPECT_THAT(error_of("[hopper]\nparticles = 99999999999999999999 # many\n"),
+                HasSubstr("hopper.particles = 99999999999999999999 is out of range: allowed"));
+    EXPECT_THAT(error_of("[protocol]\nunknown_key = 99999999999999999999\n"),
+                HasSubstr("protocol.unknown_key = 99999999999999999999 is not a 64-bit integer"));
+    // Other syntax errors are reported as before.
+    EXPECT_THAT(error_of("[hopper\n"), HasSubstr("TOML syntax error"));
+}
+
+// Issue 14, item 5: a hopper narrower than the built-in default outlet (4.5 cm) needed a dummy
+// D_cm in [hopper], because that unused default was checked against the width.
+TEST(SweepParse, ANarrowHopperNeedsNoDummyOutlet) {
+    const std::string narrow = "[hopper]\nwidth_cm = 4.0\nparticles = 30\ntheta_deg = 60\n";
+    const SweepFile f = parse(narrow + "[campaign]\nname = \"n\"\n[sweep]\nD_cm = [1.9, 2.2]\n");
+    ASSERT_EQ(f.campaign.points.size(), 2u);
+    EXPECT_DOUBLE_EQ(f.campaign.points[0].scene.hopper.outlet, 0.019);
+    EXPECT_DOUBLE_EQ(scene_at(f, 2.5, 60).hopper.outlet, 0.025);
+    // A D_cm that is given, or an outlet that does not fit in a point, is still refused.
+    EXPECT_THAT(error_of(narrow + "D_cm = 4.5\n"), HasSubstr("D_cm = 4.5 must be smaller"));
+    EXPECT_THAT(error_of(narrow + "[campaign]\nname = \"n\"\n[sweep]\nD_cm = [1.9, 4.2]\n"),
+                HasSubstr("D_cm = 4.2 must be smaller than hopper.width_cm = 4"));
+    EXPECT_THROW(scene_at(f, 4.5, 60), ConfigError);
+}

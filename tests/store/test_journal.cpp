@@ -3,8 +3,17 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <condition_variable>
+#include <csignal>
 #include <fstream>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "fixtures.hpp"
@@ -202,6 +211,166 @@ TEST(Journal, OneWriterAtATime) {
     Journal again = Journal::open(
         p, [](auto, auto, auto) {}, scan);
     EXPECT_TRUE(journal_locked(p));
+}
+
+// A one-shot signal between two threads.
+class Flag {
+  public:
+    void raise() {
+        {
+            std::lock_guard lock(m_);
+            up_ = true;
+        }
+        cv_.notify_all();
+    }
+    void wait() {
+        std::unique_lock lock(m_);
+        cv_.wait(lock, [&] { return up_; });
+    }
+
+  private:
+    std::mutex m_;
+    std::condition_variable cv_;
+    bool up_ = false;
+};
+
+// Issue 14, item 1: two runs creating a new store's journal at once. The interleaving that lost
+// everything: A has its new file open, B (a shared temporary name) deleted it and opened its own,
+// A linked B's file into place and wrote every record into its deleted one. Made deterministic
+// by pausing each creator before it links its file into place.
+TEST(Journal, TwoCreatorsAtOnceNeverLeaveAWriterOnADeletedFile) {
+    const fs::path dir = scratch();
+    const fs::path p = dir / "j";
+    Flag a_paused, b_paused, a_done;
+    std::string b_error;
+    std::thread b([&] {
+        a_paused.wait();
+        try {
+            Journal::create(p, {.before_link = [&] {
+                                b_paused.raise();
+                                a_done.wait();
+                            }});
+        } catch (const core::StoreError& e) {
+            b_error = e.what();
+        }
+    });
+    std::optional<Journal> a;
+    try {
+        a.emplace(Journal::create(p, {.before_link = [&] {
+                                      a_paused.raise();
+                                      b_paused.wait();
+                                  }}));
+        a->append(RecordType::result, payload(50, 9));
+    } catch (...) {
+        a_done.raise();
+        b.join();
+        throw;
+    }
+    a_done.raise();
+    b.join();
+    // A's record is in the journal at the path (not in a deleted file), B was refused, and no
+    // temporary file is left behind.
+    const auto v = read_all(p);
+    ASSERT_EQ(v.size(), 1u);
+    EXPECT_EQ(v[0].payload, payload(50, 9));
+    EXPECT_NE(b_error.find("File exists"), std::string::npos) << b_error;
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        ++files;
+        EXPECT_EQ(e.path().filename(), "j");
+    }
+    EXPECT_EQ(files, 1);
+}
+
+// The run that loses the race opens the winner's journal: locked while the winner writes it.
+TEST(Journal, OpenOrCreateLosingTheRaceFindsTheWinnersJournalInUse) {
+    const fs::path p = scratch() / "j";
+    Flag b_paused, a_done;
+    std::string b_error;
+    std::thread b([&] {
+        JournalScan scan;
+        bool created = true;
+        try {
+            Journal::open_or_create(p, [](auto, auto, auto) {}, scan, created, {.before_link = [&] {
+                                        b_paused.raise();
+                                        a_done.wait();
+                                    }});
+        } catch (const core::StoreError& e) {
+            b_error = e.what();
+        }
+        EXPECT_FALSE(created);
+    });
+    b_paused.wait();
+    JournalScan scan;
+    bool created = false;
+    Journal a = Journal::open_or_create(
+        p, [](auto, auto, auto) {}, scan, created);
+    EXPECT_TRUE(created);
+    EXPECT_EQ(scan.records, 0u);
+    a.append(RecordType::run_start, payload(10, 1));
+    a_done.raise();
+    b.join();
+    EXPECT_NE(b_error.find("is in use by another `campaign run`"), std::string::npos) << b_error;
+    EXPECT_EQ(read_all(p).size(), 1u);
+}
+
+// Issue 14, item 5: a journal deleted (or replaced) while a run writes it is noticed at the next
+// record instead of the run reporting success.
+TEST(Journal, DeletedOrReplacedJournalIsNoticedAtTheNextAppend) {
+    const fs::path p = scratch() / "j";
+    {
+        Journal j = Journal::create(p);
+        j.append(RecordType::run_start, payload(10, 1));
+        fs::remove(p);
+        try {
+            j.append(RecordType::result, payload(10, 2));
+            FAIL() << "append to a deleted journal succeeded";
+        } catch (const core::StoreError& e) {
+            EXPECT_NE(std::string(e.what()).find("was deleted or replaced"), std::string::npos)
+                << e.what();
+        }
+    }
+    Journal j = Journal::create(p);
+    fs::rename(p, p.string() + ".moved");
+    { Journal other = Journal::create(p); }
+    EXPECT_THROW(j.append(RecordType::result, payload(10, 2)), core::StoreError);
+}
+
+// Issue 14, item 2: a record that does not fit on the disk (here a file size limit: the same
+// failed write) is an error that says so, and the partial record is taken back, so the journal
+// ends with its last complete record and the next writer has nothing to drop.
+TEST(Journal, ARecordThatDoesNotFitIsTakenBackAndReported) {
+    const fs::path p = scratch() / "j";
+    { Journal j = Journal::create(p); }
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        ::signal(SIGXFSZ, SIG_IGN);
+        const rlimit limit{4096, 4096};
+        ::setrlimit(RLIMIT_FSIZE, &limit);
+        JournalScan scan;
+        Journal j = Journal::open(
+            p, [](auto, auto, auto) {}, scan);
+        j.append(RecordType::run_start, payload(1000, 1));
+        try {
+            j.append(RecordType::result, payload(8000, 2));
+        } catch (const core::StoreError& e) {
+            const std::string m = e.what();
+            ::_exit(m.find("File too large") != std::string::npos &&
+                            m.find("this record was not written") != std::string::npos
+                        ? 0
+                        : 3);
+        }
+        ::_exit(4);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << "3: wrong message, 4: no error";
+    JournalScan scan;
+    const auto v = read_all(p, &scan);
+    ASSERT_EQ(v.size(), 1u);
+    EXPECT_EQ(scan.torn_bytes(), 0u);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "fixtures.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/analysis.hpp"
+#include "hopper/store/journal.hpp"
 #include "hopper/store/store.hpp"
 
 namespace hopper::store {
@@ -68,6 +69,22 @@ fs::path finished_store(const fs::path& dir) {
     s.append(e);
     s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
     return p;
+}
+
+// Opens the store, expects its first note to contain `note`, and runs an empty run (which
+// rebuilds the HDF5 file when it is not in step); the realizations read back afterwards.
+std::vector<std::pair<std::string, Bytes>> reopen_expecting(const fs::path& p,
+                                                            const std::string& note) {
+    {
+        Store s(p);
+        EXPECT_FALSE(s.notes().empty());
+        if (!s.notes().empty()) {
+            EXPECT_TRUE(contains(s.notes()[0], note)) << s.notes()[0];
+        }
+        s.begin_run(run_record({A, B}));
+        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    }
+    return contents(read_realizations(p));
 }
 
 TEST(Store, EveryFieldSurvivesJournalAndHdf5) {
@@ -219,7 +236,7 @@ TEST(Store, StatusWorksWhileARunWrites) {
 TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     const fs::path p = scratch() / "s.h5";
     {
-        Store s(p, StoreOptions{0.0, "", 0});
+        Store s(p, StoreOptions{0.0, "", 0, true, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 0, fabricated(0)));
         s.append(result_record(B, 1, fabricated(1)));
@@ -235,28 +252,83 @@ TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
 }
 
+// Build item 5 of issue 14: damage inside an HDF5 file that was closed in step (a disk error
+// later) was read as it is. Here a point's label is altered in the file's bytes (same size):
+// the checksum recorded in the sync record exposes it, and the file is rebuilt from the journal
+// without being opened.
+TEST(Store, AFileDamagedAfterItWasClosedIsRebuiltFromTheJournal) {
+    const fs::path p = finished_store(scratch());
+    const auto before = contents(read_journal_realizations(p));
+    std::string bytes;
+    {
+        std::ifstream in(p, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::string label = B.label, altered = "D_cm=4.7 theta_deg=60";
+    int replaced = 0;
+    for (auto at = bytes.find(label); at != std::string::npos; at = bytes.find(label, at + 1)) {
+        bytes.replace(at, altered.size(), altered);
+        ++replaced;
+    }
+    ASSERT_GT(replaced, 0) << "the label is not stored as plain bytes";
+    std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;
+    EXPECT_EQ(reopen_expecting(p, "does not match the checksum"), before);
+    Store again(p);
+    EXPECT_TRUE(again.notes().empty()) << again.notes()[0];
+}
+
+// Stores written before checksums have sync records without one: still in step, not rebuilt.
+TEST(Store, ASyncRecordWithoutAChecksumStillCountsAsInStep) {
+    const fs::path p = finished_store(scratch());
+    const fs::path j = journal_path(p);
+    std::uint64_t last = 0;
+    SyncRecord sync;
+    scan_journal(j, [&](RecordType t, std::uint64_t off, auto payload) {
+        if (t == RecordType::sync) {
+            last = off;
+            sync = decode_sync(payload);
+        }
+    });
+    ASSERT_TRUE(sync.file.has_value());
+    fs::resize_file(j, last);
+    {
+        JournalScan scan;
+        Journal journal = Journal::open(
+            j, [](auto, auto, auto) {}, scan);
+        sync.file.reset();
+        journal.append(RecordType::sync, encode(sync));
+    }
+    Store s(p);
+    EXPECT_TRUE(s.notes().empty()) << s.notes()[0];
+}
+
+// `campaign analyze` replaces /analysis in a closed file: it records the file's new checksum,
+// so the next run finds the file in step (no rebuild, /analysis kept).
+TEST(Store, ReplacingADerivedGroupKeepsTheFileInStep) {
+    const fs::path p = finished_store(scratch());
+    DerivedGroup g;
+    g.name = "analysis";
+    g.attributes.emplace_back("created", "now");
+    DerivedGroup sub;
+    sub.name = "points";
+    g.groups.push_back(sub);
+    write_derived_group(p, g);
+    write_derived_group(p, g);  // twice: each replacement records its own checksum
+    {
+        Store s(p);
+        EXPECT_TRUE(s.notes().empty()) << s.notes()[0];
+    }
+    EXPECT_EQ(derived_group_members(p, "analysis"), std::vector<std::string>{"points"});
+}
+
 TEST(Store, DamagedOrMissingHdf5IsRebuilt) {
     const fs::path dir = scratch();
     const fs::path p = finished_store(dir);
     const auto before = contents(read_journal_realizations(p));
     fs::resize_file(p, fs::file_size(p) / 2);  // keeps the HDF5 signature, loses the rest
-    {
-        Store s(p);
-        ASSERT_FALSE(s.notes().empty());
-        EXPECT_TRUE(contains(s.notes()[0], "damaged")) << s.notes()[0];
-        s.begin_run(run_record({A, B}));
-        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
-    }
-    EXPECT_EQ(contents(read_realizations(p)), before);
+    EXPECT_EQ(reopen_expecting(p, "damaged"), before);
     fs::remove(p);
-    {
-        Store s(p);
-        ASSERT_FALSE(s.notes().empty());
-        EXPECT_TRUE(contains(s.notes()[0], "missing")) << s.notes()[0];
-        s.begin_run(run_record({A, B}));
-        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
-    }
-    EXPECT_EQ(contents(read_realizations(p)), before);
+    EXPECT_EQ(reopen_expecting(p, "missing"), before);
 }
 
 TEST(Store, ForeignFilesAndAMissingJournalGiveClearErrors) {
@@ -276,6 +348,32 @@ TEST(Store, ForeignFilesAndAMissingJournalGiveClearErrors) {
     { Store s(q); }
     std::ofstream(q) << "not hdf5";
     EXPECT_TRUE(contains(message_of([&] { Store s(q); }), "although its journal"));
+}
+
+// Issue 14, item 5: `--store DIR` said "not an HDF5 file".
+TEST(Store, ADirectoryIsCalledADirectory) {
+    const fs::path dir = scratch();
+    fs::create_directories(dir / "d.h5");
+    for (const fs::path& p : {dir / "d.h5", dir}) {
+        const std::string m = message_of([&] { Store s(p); });
+        EXPECT_TRUE(contains(m, "'" + p.string() + "' is a directory")) << m;
+        EXPECT_TRUE(contains(m, (p / "store.h5").string())) << m;
+        EXPECT_TRUE(contains(message_of([&] { read_status(p); }), "is a directory"));
+    }
+    EXPECT_TRUE(fs::is_empty(dir / "d.h5")) << "nothing was created inside";
+}
+
+// Issue 14, item 1: after the race a journal held only its header while the HDF5 file held every
+// result, and the next run rebuilt (emptied) the file from that journal. A file holding more
+// than its journal knows is refused and left alone.
+TEST(Store, AFileHoldingMoreThanItsJournalIsRefusedNotRebuilt) {
+    const fs::path p = finished_store(scratch());
+    fs::remove(journal_path(p));
+    { Journal j = Journal::create(journal_path(p)); }
+    const std::string m = message_of([&] { Store s(p); });
+    EXPECT_TRUE(contains(m, "holds 3 realizations but its journal")) << m;
+    EXPECT_TRUE(contains(m, "knows only 0")) << m;
+    EXPECT_EQ(read_realizations(p).size(), 3u) << "the file was left alone";
 }
 
 // A journal that exists but cannot be reached (here a symlink loop; also a directory without
@@ -325,7 +423,7 @@ TEST_P(CrashPoint, KilledWriterLosesNothingCountedAsDone) {
     }
     if (std::string(where) == "rebuild") fs::remove(p);  // force a rebuild in the child
     ASSERT_TRUE(dies_of_sigkill([&, where = where, n = n] {
-        Store s(p, StoreOptions{0.0, where, n});
+        Store s(p, StoreOptions{0.0, where, n, true, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 1, fabricated(1)));
         s.append(result_record(A, 2, fabricated(2)));

@@ -5,7 +5,7 @@
 //
 // master -> worker: task (task id, attempt), stop_now (end the running task early), quit
 // worker -> master: result (encoded RealizationResult), interrupted (stopped early: no result),
-//                   error (an exception's message)
+//                   error (an exception's message), heartbeat (the running task advances)
 // Only task ids travel: every process expands the same task list from the same sweep file.
 
 #include <chrono>
@@ -26,6 +26,7 @@ enum class MessageKind : std::uint8_t {
     result = 4,
     interrupted = 5,
     error = 6,
+    heartbeat = 7,
 };
 
 struct Message {

@@ -3,6 +3,12 @@
 // expected first), stores every result as it arrives (the only writer of the store), retries
 // failed attempts, reacts to stop requests, and prints a progress line at a steady interval.
 //
+// Silent workers: every busy worker sends a heartbeat while its realization advances. One silent
+// for longer than the limit (a hung node, a stopped process) is reported and its realization is
+// handed to another worker; the silent worker gets no new task until it speaks again. A late
+// result of a reassigned realization is compared with the stored one (physics digest) and
+// stored once: the first result to arrive is kept, a later one is only checked.
+//
 // Retry policy: an attempt that raises an exception (no result) is recorded in the store's
 // failure log and handed out once more in the same run (max_attempts = 2 in all); if that fails
 // too the task is left in state "error", shown by status, and retried by the next `campaign run`.
@@ -11,6 +17,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -26,6 +33,7 @@ struct TaskRef {
     std::string label;
     int realization = 0;
     std::uint64_t seed = 0;
+    double expected_seconds = 0.0;  // from the cost model (plan.hpp); 0: unknown
 };
 
 struct MasterOptions {
@@ -33,15 +41,25 @@ struct MasterOptions {
     double grace = 60.0;              // s running tasks may take to finish after a drain request
     int max_attempts = 2;             // attempts per task and run when attempts raise exceptions
     std::chrono::milliseconds max_wait{250};  // longest sleep between looks at stop requests
+    // Seconds a busy worker may stay silent (no heartbeat, no reply) before its realization is
+    // handed to another worker. Unset: worker_timeout_factor times the realization's expected
+    // duration, and at least min_worker_timeout.
+    std::optional<double> worker_timeout;
+    double worker_timeout_factor = 5.0;
+    double min_worker_timeout = 300.0;
 };
 
 struct MasterReport {
-    int stored = 0;       // results stored by this run (any status)
-    int failed = 0;       // of which with status failed
-    int errors = 0;       // attempts that raised exceptions
-    int gave_up = 0;      // tasks left in error after max_attempts
-    int interrupted = 0;  // running tasks stopped early (they run again on resume)
-    int not_started = 0;  // tasks never handed out because of a stop request
+    int stored = 0;          // results stored by this run (any status)
+    int failed = 0;          // of which with status failed
+    int errors = 0;          // attempts that raised exceptions
+    int gave_up = 0;         // tasks left in error after max_attempts
+    int interrupted = 0;     // running tasks stopped early (they run again on resume)
+    int not_started = 0;     // tasks never handed out because of a stop request
+    int reassigned = 0;      // realizations handed to another worker after a silence
+    int late_identical = 0;  // late results of reassigned realizations equal to the stored one
+    int late_different = 0;  // ... that differ (the engine is deterministic: a bug or a bad node)
+    int silent_at_end = 0;   // workers still silent when the run ended
     bool stopped = false;
     std::string stop_reason;
     double wall_seconds = 0.0;

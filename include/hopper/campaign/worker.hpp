@@ -1,6 +1,13 @@
 #pragma once
 // A worker: runs the tasks the master hands it until told to quit. Workers only simulate; they
 // never touch the store.
+//
+// The realization runs in a thread of its own while the calling thread (the only one that uses
+// the channel, so MPI needs just MPI_THREAD_FUNNELED) watches the channel: a stop or quit from
+// the master is acted on at the next time step however long a step takes, and a heartbeat goes
+// to the master every heartbeat_interval seconds while the realization advances. A worker that
+// stops sending them (a hung node, a stopped process, a computation that no longer advances) is
+// found by the master, which hands its realization to another worker.
 
 #include <functional>
 
@@ -14,9 +21,14 @@ namespace hopper::campaign {
 using TaskRunner = std::function<engine::RealizationResult(int task_id, const engine::RunHooks&)>;
 
 struct WorkerOptions {
-    // Simulated seconds between looks for a stop message while a realization runs.
-    double poll_interval = 0.005;
+    // Wall-clock seconds between heartbeats while a realization advances (0: none).
+    double heartbeat_interval = 10.0;
+    // Longest wait of the watching thread between looks at the channel and the realization.
+    double watch_interval = 0.02;
 };
+
+// The heartbeat interval that suits a master's silence limit: a few per limit, at most every 10 s.
+double heartbeat_interval_for(double worker_timeout);
 
 // Returns when the master sends quit (at once if it arrives during a task: the task is stopped
 // and nothing is sent back, since the master is no longer listening).

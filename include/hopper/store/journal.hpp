@@ -47,15 +47,37 @@ using RecordVisitor =
     std::function<void(RecordType, std::uint64_t offset, std::span<const std::uint8_t>)>;
 JournalScan scan_journal(const std::filesystem::path& path, const RecordVisitor& visit);
 
+// Test hook of Journal::create: called once the new journal is complete and locked under its
+// private temporary name, before it is linked into place (tests pause there to make two
+// creators race deterministically).
+using BeforeLinkHook = std::function<void()>;
+
+struct JournalOptions {
+    // A file system without locks (NFS without a lock daemon, Lustre without flock): true
+    // refuses to write (StoreError naming the switch), false goes on unprotected (locked() is
+    // then false). A lock held by another process is refused either way.
+    bool require_lock = true;
+    BeforeLinkHook before_link;  // test hook of create(), see above
+};
+
 // The writer's handle: holds an exclusive lock (fcntl) on the journal while open.
 class Journal {
   public:
-    // Creates the file (header, fsync of file and directory). Throws if it exists.
-    static Journal create(const std::filesystem::path& path);
+    // Creates the file: written and locked under a name private to this call, then linked into
+    // place (exclusive: never replaces a journal), fsync of file and directory. Throws if a
+    // journal exists at `path`.
+    static Journal create(const std::filesystem::path& path, const JournalOptions& options = {});
     // Opens for appending: takes the lock, scans (calling `visit` per record, as scan_journal)
     // and drops a torn tail (truncates to scan.valid_bytes, fsync'd).
     static Journal open(const std::filesystem::path& path, const RecordVisitor& visit,
-                        JournalScan& scan);
+                        JournalScan& scan, const JournalOptions& options = {});
+    // Opens the journal at `path`, or creates it when there is none. Two processes calling this
+    // at once end with one journal: the loser of the creation opens the winner's, which is
+    // locked ("in use by another `campaign run`") or, once the winner is done, resumed.
+    // `created` tells which happened.
+    static Journal open_or_create(const std::filesystem::path& path, const RecordVisitor& visit,
+                                  JournalScan& scan, bool& created,
+                                  const JournalOptions& options = {});
 
     Journal(Journal&& o) noexcept;
     Journal& operator=(Journal&& o) noexcept;
@@ -63,11 +85,14 @@ class Journal {
     Journal& operator=(const Journal&) = delete;
     ~Journal();
 
-    // Writes one record and fdatasync's it. Returns the record's offset.
+    // Writes one record and fdatasync's it. Returns the record's offset. Throws when the file
+    // at path() is no longer the one this handle writes (the journal was deleted or replaced
+    // while the run wrote it): the record would be lost with the orphaned file.
     std::uint64_t append(RecordType type, std::span<const std::uint8_t> payload);
     std::uint64_t size() const { return size_; }
     const std::filesystem::path& path() const { return path_; }
-    // False when the file system does not support locks (then two runs are not prevented).
+    // False when the file system does not support locks and the options allowed that (then two
+    // runs are not prevented).
     bool locked() const { return locked_; }
 
     // Test hook: after this many more append() calls, the next one writes only half its record
@@ -76,7 +101,9 @@ class Journal {
 
   private:
     Journal(std::filesystem::path path, int fd, std::uint64_t size, bool locked);
-    void lock_or_throw();
+    void lock_or_throw(bool require_lock);
+    // Throws unless the file at path_ is the one fd_ refers to.
+    void check_still_in_place() const;
 
     std::filesystem::path path_;
     int fd_ = -1;

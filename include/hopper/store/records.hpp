@@ -5,6 +5,7 @@
 // (journal.hpp); the HDF5 file (store.hpp) is built from them.
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -86,12 +87,24 @@ struct RunEndRecord {
     double master_cpu_seconds = 0.0;
 };
 
+// The size and CRC-32C of a closed HDF5 file: damage after the close (a disk error flipping
+// bytes) shows as a mismatch, found without opening the file with HDF5.
+struct FileChecksum {
+    std::uint64_t bytes = 0;
+    std::uint32_t crc32c = 0;
+    bool operator==(const FileChecksum&) const = default;
+};
+// Reads the whole file (core::StoreError when it cannot).
+FileChecksum checksum_file(const std::filesystem::path& path);
+
 // Written after the HDF5 file was closed and synced: the file then holds exactly the journal's
-// first `journal_bytes` bytes, and carries `token` as an attribute.
+// first `journal_bytes` bytes, and carries `token` as an attribute. `campaign analyze` writes
+// another one after replacing /analysis (same token, the new length and checksum).
 struct SyncRecord {
     std::uint64_t token = 0;
     std::uint64_t journal_bytes = 0;
-    std::uint64_t rows = 0;  // rows in /realizations
+    std::uint64_t rows = 0;            // rows in /realizations
+    std::optional<FileChecksum> file;  // absent in sync records written before checksums
 };
 
 Bytes encode(const RunStartRecord& r);

@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -131,6 +132,12 @@ struct StoreOptions {
     // rebuilt file is renamed into place), "close" (HDF5 closed, sync record not yet written).
     std::string crash_point;
     int crash_after = 0;
+    // False: a file system without locks is accepted (with a note) instead of refused; nothing
+    // then keeps two runs from writing the store at once (`campaign run --no-file-locking`).
+    bool require_lock = true;
+    // Test hook: called when a new journal is complete under its private name, before it is
+    // linked into place (tests pause here to make two runs race for a new store).
+    std::function<void()> before_journal_link;
 };
 
 // The master's handle. Opening takes the journal's lock (one writer at a time), scans the
