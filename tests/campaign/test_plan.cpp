@@ -6,8 +6,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "hopper/campaign/plan.hpp"
+#include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 
 namespace hopper::campaign {
@@ -156,6 +161,62 @@ TEST(Plan, LongestExpectedFirst) {
     engine::SceneParams capped = narrow;
     capped.protocol.max_time = 0.01;
     EXPECT_LT(expected_cost(capped), expected_cost(narrow));  // the time limit caps it
+}
+
+}  // namespace
+}  // namespace hopper::campaign
+
+namespace hopper::campaign {
+namespace {
+
+std::map<std::string, std::string> settings_of(const std::string& text) {
+    std::map<std::string, std::string> out;
+    std::size_t start = 0;
+    for (std::size_t nl; (nl = text.find('\n', start)) != std::string::npos; start = nl + 1) {
+        const std::string line = text.substr(start, nl - start);
+        const auto eq = line.find('=');
+        out[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+    return out;
+}
+
+// The calibrated twins of the paper campaigns (issue 11; campaigns/paper-calibrated/generate.py):
+// same points, labels, realizations and seeds; each point's physics differs from its
+// spec-literal twin in exactly the calibrated choices (docs/calibration.md).
+TEST(ShippedCampaigns, CalibratedTwinsDifferOnlyInTheCalibratedChoices) {
+    namespace fs = std::filesystem;
+    const fs::path root = HOPPER_SOURCE_DIR;
+    // The calibrated model, as it appears in a point's physics text.
+    const std::map<std::string, std::string> calibrated = {
+        {"hopper.outlet_measure", "inner_envelope"}, {"hopper.wall_spacing", "0.5"}};
+    std::vector<std::pair<fs::path, fs::path>> pairs = {
+        {root / "campaigns/calibration/targets-spec.toml",
+         root / "campaigns/calibration/targets-calibrated.toml"}};
+    for (const auto& e : fs::directory_iterator(root / "campaigns/paper"))
+        if (e.path().extension() == ".toml")
+            pairs.emplace_back(e.path(), root / "campaigns/paper-calibrated" / e.path().filename());
+    ASSERT_EQ(pairs.size(), 9u);
+    for (const auto& [spec_path, cal_path] : pairs) {
+        SCOPED_TRACE(cal_path.string());
+        ASSERT_TRUE(fs::exists(cal_path));
+        const auto spec = config::load_sweep(spec_path);
+        const auto cal = config::load_sweep(cal_path);
+        const auto a = make_plan(spec.campaign), b = make_plan(cal.campaign);
+        EXPECT_EQ(b.seed, a.seed);
+        EXPECT_EQ(b.name, a.name + "-calibrated");
+        ASSERT_EQ(b.points.size(), a.points.size());
+        for (std::size_t i = 0; i < a.points.size(); ++i) {
+            EXPECT_EQ(b.points[i].label, a.points[i].label);
+            EXPECT_EQ(b.points[i].seeds, a.points[i].seeds);
+            const auto sa = settings_of(a.points[i].scene), sb = settings_of(b.points[i].scene);
+            std::map<std::string, std::string> differing;
+            for (const auto& [name, value] : sb)
+                if (!sa.count(name) || sa.at(name) != value) differing[name] = value;
+            for (const auto& [name, value] : sa)
+                EXPECT_TRUE(sb.count(name)) << name << " vanished from the calibrated twin";
+            EXPECT_EQ(differing, calibrated);
+        }
+    }
 }
 
 }  // namespace

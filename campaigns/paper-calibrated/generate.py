@@ -1,0 +1,84 @@
+#!/usr/bin/python3
+"""Writes campaigns/paper-calibrated/*.toml from campaigns/paper/*.toml, and
+campaigns/calibration/targets-calibrated.toml from targets-spec.toml (issue 11).
+
+usage: /usr/bin/python3 campaigns/paper-calibrated/generate.py
+
+Each calibrated file is its spec-literal twin with the calibrated modelling choices (CALIBRATED
+below; docs/calibration.md gives the argument for each) added to the base sections, and
+"-calibrated" appended to the campaign name. Labels and campaign seeds are untouched, so every
+realization has the same seed as its spec-literal twin: the two variants are paired samples.
+A test (tests/config, ShippedCampaigns.CalibratedTwinsDifferOnlyInTheCalibratedChoices) checks
+that the shipped files are what this script writes. Run it again after changing CALIBRATED.
+"""
+import os
+import re
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+PAPER = os.path.join(HERE, "..", "paper")
+CALIBRATION = os.path.join(HERE, "..", "calibration")
+
+# section -> [(key, TOML value, why)]
+CALIBRATED = {
+    "hopper": [
+        ("outlet_measure", '"inner_envelope"',
+         "D between the funnel walls' faces (inner envelopes) at the outlet"),
+    ],
+    "walls": [
+        ("spacing", "0.5", "smooth walls: wall disks overlapping by half a diameter"),
+    ],
+}
+
+
+def calibrate(text, name, source="campaigns/paper"):
+    lines = text.split("\n")
+    header = [
+        "# CALIBRATED VARIANT (issue 11; written by campaigns/paper-calibrated/generate.py from",
+        "# %s/%s, do not edit by hand): the spec-literal study plus the calibrated" % (source, name),
+        "# modelling choices marked 'calibrated' below (docs/calibration.md). Same points, labels",
+        "# and seeds as the spec-literal file.",
+    ]
+    out = header + []
+    seen = set()
+    for line in lines:
+        m = re.match(r"^\[([a-z]+)\]\s*$", line)
+        out.append(line)
+        if m and m.group(1) in CALIBRATED:
+            seen.add(m.group(1))
+            for key, value, why in CALIBRATED[m.group(1)]:
+                out.append("%s = %s  # calibrated: %s" % (key, value, why))
+    text = "\n".join(out)
+    # Sections the spec-literal file does not have: added before [campaign].
+    extra = ""
+    for section, items in CALIBRATED.items():
+        if section in seen:
+            continue
+        extra += "[%s]\n" % section
+        for key, value, why in items:
+            extra += "%s = %s  # calibrated: %s\n" % (key, value, why)
+        extra += "\n"
+    if extra:
+        text = text.replace("\n[campaign]\n", "\n" + extra + "[campaign]\n", 1)
+    text = re.sub(r'(\nname = ")([^"]+)(")', lambda m: m.group(1) + m.group(2) + "-calibrated" +
+                  m.group(3), text, count=1)
+    return text
+
+
+def main():
+    for name in sorted(os.listdir(PAPER)):
+        if not name.endswith(".toml"):
+            continue
+        with open(os.path.join(PAPER, name)) as fh:
+            text = fh.read()
+        with open(os.path.join(HERE, name), "w") as fh:
+            fh.write(calibrate(text, name))
+        print("wrote campaigns/paper-calibrated/" + name)
+    with open(os.path.join(CALIBRATION, "targets-spec.toml")) as fh:
+        text = fh.read()
+    with open(os.path.join(CALIBRATION, "targets-calibrated.toml"), "w") as fh:
+        fh.write(calibrate(text, "targets-spec.toml", "campaigns/calibration"))
+    print("wrote campaigns/calibration/targets-calibrated.toml")
+
+
+if __name__ == "__main__":
+    main()
