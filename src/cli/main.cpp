@@ -14,6 +14,7 @@
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
 #include "cli/parse.hpp"
+#include "cli/python_tools.hpp"
 #include "cli/run.hpp"
 #include "cli/simulate.hpp"
 #include "cli/status.hpp"
@@ -43,6 +44,8 @@ constexpr Command commands[] = {
     {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)"},
     {"status", "progress and failures of a store (works while a run writes it)"},
     {"analyze", "statistics and fits of a store, written into its /analysis group"},
+    {"plot", "figures of a store (survival, jam rate, Beverloo, fields; png, pdf, svg)"},
+    {"export", "a store's tables as CSV files and its field maps for ParaView"},
     {"simulate", "run one realization of one scene of a sweep file (no MPI)"},
     {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself"},
 };
@@ -172,6 +175,14 @@ int main(int argc, char** argv) {
                 hopper::cli::print_analyze_help(std::cout);
                 return 0;
             }
+            if (args[1] == "plot") {
+                hopper::cli::print_plot_help(std::cout);
+                return 0;
+            }
+            if (args[1] == "export") {
+                hopper::cli::print_export_help(std::cout);
+                return 0;
+            }
             if (args[1] == "submit") {
                 hopper::cli::print_submit_help(std::cout);
                 return 0;
@@ -191,6 +202,8 @@ int main(int argc, char** argv) {
         if (command == "status") return hopper::cli::status_command(rest);
         if (command == "analyze") return hopper::cli::analyze_command(rest);
         if (command == "submit") return hopper::cli::submit_command(rest);
+        if (command == "plot") return hopper::cli::plot_command(rest);
+        if (command == "export") return hopper::cli::export_command(rest);
         if (command.starts_with("-"))
             return error("unknown option '" + command + "' (try 'campaign --help')", exit_usage);
         return error("unknown command '" + command + "' (available: " + available_commands() + ")",
