@@ -79,8 +79,11 @@ po::options_description simulate_options() {
          "random seed, a non-negative integer (required)")                           //
         ("json", po::bool_switch(), "print one JSON object instead of the summary")  //
         ("snapshots", po::value<std::string>()->value_name("DIR"),
-         "write LAMMPS-style dump files DIR/hopper.NNNNNN.dump (OVITO, ParaView); existing "
-         "hopper.*.dump files in DIR are replaced")  //
+         "write particle snapshots into DIR: VTK files hopper.NNNNNN.vtu with the series "
+         "hopper.pvd (open hopper.pvd in ParaView) and LAMMPS dump files hopper.NNNNNN.dump "
+         "(OVITO); earlier frames in DIR are removed")  //
+        ("snapshot-format", po::value<std::string>()->value_name("LIST"),
+         "vtu, dump or vtu,dump (default vtu,dump)")  //
         ("snapshot-interval", po::value<std::string>()->value_name("S"),
          "seconds of simulated time between snapshots (default 0.05)")                            //
         ("progress", po::bool_switch(), "progress line on stderr every 0.5 s of simulated time")  //
@@ -90,7 +93,8 @@ po::options_description simulate_options() {
 
 void print_simulate_help(std::ostream& os) {
     os << "usage: campaign simulate SWEEP.toml --D CM --theta DEG --seed N [--json]\n"
-          "                         [--snapshots DIR] [--snapshot-interval S] [--progress]\n\n"
+          "                         [--snapshots DIR] [--snapshot-interval S]\n"
+          "                         [--snapshot-format vtu,dump] [--progress]\n\n"
           "Runs one realization of the sweep file's base scene with outlet D and wall angle\n"
           "theta, and prints a summary (or, with --json, one JSON object) on stdout.\n\n"
        << simulate_options();
@@ -118,6 +122,12 @@ int simulate_command(const std::vector<std::string>& args) {
     opt.json = vm["json"].as<bool>();
     opt.progress = vm["progress"].as<bool>();
     if (vm.count("snapshots")) opt.snapshot_dir = vm["snapshots"].as<std::string>();
+    if (vm.count("snapshot-format")) {
+        if (!opt.snapshot_dir)
+            throw hopper::core::ConfigError("--snapshot-format needs --snapshots DIR");
+        opt.snapshot_formats =
+            hopper::cli::parse_snapshot_formats(vm["snapshot-format"].as<std::string>());
+    }
     if (vm.count("snapshot-interval")) {
         if (!opt.snapshot_dir)
             throw hopper::core::ConfigError("--snapshot-interval needs --snapshots DIR");

@@ -24,7 +24,8 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
     std::optional<SnapshotWriter> snapshots;
     if (opt.snapshot_dir) {
         try {
-            snapshots.emplace(*opt.snapshot_dir);
+            snapshots.emplace(*opt.snapshot_dir, engine::derive_constants(scene).dt,
+                              opt.snapshot_formats);
         } catch (const std::exception& e) {
             throw core::ConfigError("--snapshots: cannot use directory '" +
                                     opt.snapshot_dir->string() + "': " + e.what());

@@ -6,6 +6,8 @@
 #include <optional>
 #include <ostream>
 
+#include "cli/snapshot_writer.hpp"
+
 namespace hopper::cli {
 
 // Exit codes of the campaign executable.
@@ -24,6 +26,7 @@ struct SimulateOptions {
     bool json = false;
     std::optional<std::filesystem::path> snapshot_dir;
     double snapshot_interval = 0.05;  // s of simulated time
+    SnapshotFormats snapshot_formats;  // default: both vtu and dump
     bool progress = false;
     double progress_interval = 0.5;  // s of simulated time
 };
