@@ -43,7 +43,7 @@ void write_summary(std::ostream& out, const store::StoreStatus& status,
         width = std::max(width, l.size());
     char buf[512];
     std::snprintf(buf, sizeof buf, "%-*s  %13s  %6s  %6s  %14s  %14s\n", static_cast<int>(width),
-                  "point", "realizations", "failed", "jams", "mean surv. (s)", "mean empty (s)");
+                  "point", "realizations", "failed", "jams", "tau (s)", "mean empty (s)");
     out << buf;
     for (const auto& l : labels) {
         const auto it = by_label.find(l);
@@ -60,6 +60,7 @@ void write_summary(std::ostream& out, const store::StoreStatus& status,
                       empty);
         out << buf;
     }
+    out << "(tau: mean survival time, the censored maximum-likelihood mean = flow time / jams)\n";
 }
 
 }  // namespace hopper::campaign

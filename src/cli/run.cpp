@@ -33,10 +33,14 @@ po::options_description run_options() {
          "after SIGUSR1/SIGINT, seconds running realizations may take to finish before they "
          "are stopped (default 60)")  //
         ("threads", po::value<std::string>()->value_name("N"),
-         "worker threads when not started by mpirun (default 1)")  //
+         "worker threads when not started by mpirun (default 1; under mpirun the workers are "
+         "the ranks 1..N-1 and this is ignored, with a note)")  //
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
+        ("allow-mixed", po::bool_switch(),
+         "accept new points whose settings, not varied by the sweep, differ from the store's "
+         "points (refused by default: the fits would pool different physics)")  //
         ("help,h", "show this help");
     return d;
 }
@@ -51,13 +55,14 @@ double non_negative(const char* option, const std::string& text) {
 
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
-          "                    [--threads N] [--flush-interval S]\n"
+          "                    [--threads N] [--flush-interval S] [--allow-mixed]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
           "other ranks simulate (use one rank more than cores: the master sleeps while waiting).\n"
           "A store whose physics differs from the sweep file's is refused; more points or\n"
-          "realizations extend it.\n\n"
+          "realizations extend it, unless the new points differ from the stored ones in a\n"
+          "setting the sweep does not vary (refused unless --allow-mixed).\n\n"
           "Signals: SIGUSR1 or SIGINT: no new realizations, running ones may finish within\n"
           "--grace seconds; SIGTERM or a second signal: stop running ones now. Either way what\n"
           "finished is stored and the exit code is 4; the same command resumes.\n\n"
@@ -94,6 +99,7 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         if (n < 1 || n > 4096)
             throw core::ConfigError("--threads must be between 1 and 4096, got '" + t + "'");
         opt.threads = static_cast<int>(n);
+        opt.threads_given = true;
     }
     // Test hook (not for users): HOPPER_STORE_CRASH=<point>:<n> makes the store raise SIGKILL
     // the n-th time it passes <point> (journal, hdf5, rebuild, close); see store.hpp.
@@ -106,6 +112,7 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         opt.store_options.crash_after =
             static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
     }
+    opt.allow_mixed = vm["allow-mixed"].as<bool>();
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;
     // At the end of a run that was not stopped: the same analysis as `campaign analyze`.

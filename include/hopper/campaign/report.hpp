@@ -19,7 +19,7 @@ std::string progress_line(int done, int total, int running, int failed, double r
 // One row per point of `labels` (the sweep's points, in order): realizations stored/planned,
 // failed, jams, mean survival time (total survival time / jams: the censored-exponential
 // maximum-likelihood mean; "-" without jams), mean empty time over the realizations that
-// emptied.
+// emptied; then a line saying what tau is.
 void write_summary(std::ostream& out, const store::StoreStatus& status,
                    const std::vector<std::string>& labels);
 
