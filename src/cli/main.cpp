@@ -72,11 +72,16 @@ po::options_description simulate_options() {
     // Numbers are read as text and checked by cli/options.hpp, so that "-1", "1.5", "nan" get a
     // clear message (Boost's lexical casts would wrap "-1" into a huge unsigned seed).
     d.add_options()                                                                           //
-        ("D", po::value<std::string>()->value_name("CM"), "outlet width D in cm (required)")  //
+        ("D", po::value<std::string>()->value_name("CM"), "outlet width D in cm")  //
         ("theta", po::value<std::string>()->value_name("DEG"),
-         "wall angle to the horizontal in degrees (required)")  //
-        ("seed", po::value<std::string>()->value_name("N"),
-         "random seed, a non-negative integer (required)")                           //
+         "wall angle to the horizontal in degrees")  //
+        ("seed", po::value<std::string>()->value_name("N"), "random seed, a non-negative integer")  //
+        ("store", po::value<std::string>()->value_name("STORE.h5"),
+         "with --point: the store holding the realization")  //
+        ("point", po::value<std::string>()->value_name("LABEL"),
+         "re-run a stored realization of this point (its label, as `campaign status` lists it)")  //
+        ("realization", po::value<std::string>()->value_name("I"),
+         "with --point: the realization's index (0-based)")  //
         ("json", po::bool_switch(), "print one JSON object instead of the summary")  //
         ("snapshots", po::value<std::string>()->value_name("DIR"),
          "write particle snapshots into DIR: VTK files hopper.NNNNNN.vtu with the series "
@@ -92,11 +97,19 @@ po::options_description simulate_options() {
 }
 
 void print_simulate_help(std::ostream& os) {
-    os << "usage: campaign simulate SWEEP.toml --D CM --theta DEG --seed N [--json]\n"
-          "                         [--snapshots DIR] [--snapshot-interval S]\n"
-          "                         [--snapshot-format vtu,dump] [--progress]\n\n"
+    os << "usage: campaign simulate SWEEP.toml --D CM --theta DEG --seed N [OPTIONS]\n"
+          "       campaign simulate --store STORE.h5 --point LABEL --realization I [OPTIONS]\n"
+          "OPTIONS: [--json] [--snapshots DIR] [--snapshot-interval S]\n"
+          "         [--snapshot-format vtu,dump] [--progress]\n\n"
           "Runs one realization of the sweep file's base scene with outlet D and wall angle\n"
-          "theta, and prints a summary (or, with --json, one JSON object) on stdout.\n\n"
+          "theta, or runs a stored realization again (any point, whatever its settings: the\n"
+          "scene comes from the sweep text the store recorded, checked against the point's\n"
+          "stored physics, and the seed from the store; the outcome is compared with the\n"
+          "stored one), and prints a summary (or, with --json, one JSON object) on stdout.\n"
+          "--progress prints the simulated time, the wall-clock rate and an estimate of the\n"
+          "time left on stderr.\n\n"
+          "exit codes: 0 done, 1 error (or the re-run differs from the stored realization),\n"
+          "            2 bad command line or sweep file, 3 the realization failed\n\n"
        << simulate_options();
 }
 
@@ -115,10 +128,28 @@ int simulate_command(const std::vector<std::string>& args) {
 
     using hopper::cli::parse_finite;
     hopper::cli::SimulateOptions opt;
-    opt.sweep = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
-    opt.D_cm = parse_finite("--D", required(vm, "D"));
-    opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
-    opt.seed = hopper::cli::parse_seed("--seed", required(vm, "seed"));
+    if (vm.count("point")) {
+        for (const char* o : {"D", "theta", "seed", "sweep"})
+            if (vm.count(o))
+                throw hopper::core::ConfigError(
+                    std::string(o == std::string("sweep") ? "a sweep file" : "--" + std::string(o)) +
+                    " cannot be given with --point: the store has the point's scene and seed");
+        opt.store = required(vm, "store");
+        opt.point = vm["point"].as<std::string>();
+        const std::uint64_t r = hopper::cli::parse_seed("--realization", required(vm, "realization"));
+        if (r > 100000000)
+            throw hopper::core::ConfigError("--realization " + std::to_string(r) + " is too large");
+        opt.realization = static_cast<int>(r);
+    } else {
+        for (const char* o : {"store", "realization"})
+            if (vm.count(o))
+                throw hopper::core::ConfigError(std::string("--") + o +
+                                                " needs --point LABEL (a stored realization)");
+        opt.sweep = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
+        opt.D_cm = parse_finite("--D", required(vm, "D"));
+        opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
+        opt.seed = hopper::cli::parse_seed("--seed", required(vm, "seed"));
+    }
     opt.json = vm["json"].as<bool>();
     opt.progress = vm["progress"].as<bool>();
     if (vm.count("snapshots")) opt.snapshot_dir = vm["snapshots"].as<std::string>();

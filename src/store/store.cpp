@@ -347,6 +347,7 @@ StoreStatus read_status(const fs::path& store) {
     s.hdf5_in_step = !s.writer_active && journal_says_in_step(state) && fs::exists(store, ec);
     s.journal_bytes = scan.valid_bytes;
     s.torn_bytes = scan.torn_bytes();
+    s.plan = std::move(state.plan);
     return s;
 }
 

@@ -105,6 +105,7 @@ struct StoreStatus {
     bool hdf5_in_step = false;      // the HDF5 file was closed in step with the journal
     std::uint64_t journal_bytes = 0;
     std::uint64_t torn_bytes = 0;  // an incomplete last record (in progress or torn)
+    CampaignPlan plan;             // the union of every run's plan (labels, scene texts, seeds)
 };
 
 // Progress and failures from the journal. Never blocks or disturbs a writer.
