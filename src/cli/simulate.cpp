@@ -1,6 +1,8 @@
 #include "cli/simulate.hpp"
 
 #include <atomic>
+#include <chrono>
+#include <memory>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -8,6 +10,7 @@
 #include "cli/result_output.hpp"
 #include "cli/snapshot_writer.hpp"
 #include "hopper/campaign/plan.hpp"
+#include "hopper/campaign/report.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/store/store.hpp"
 #include "hopper/core/error.hpp"
@@ -86,14 +89,43 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
         hooks.stop = &stop;
     }
     if (opt.progress) {
+        // Wall-clock rate (simulated seconds per wall second) and, once particles leave, the
+        // time left: the particles still in the hopper at the discharge rate seen so far in wall
+        // time, at most what max_time leaves at the current rate.
+        const auto wall_start = std::chrono::steady_clock::now();
+        struct Since {
+            double wall = -1.0, sim = 0.0;
+            int in_hopper = 0;
+        };
+        auto opened = std::make_shared<Since>();
+        const double max_time = scene.protocol.max_time;
         hooks.progress_interval = opt.progress_interval;
-        hooks.on_progress = [&err](const engine::Progress& p) {
-            char line[160];
+        hooks.on_progress = [&err, wall_start, opened, max_time](const engine::Progress& p) {
+            const double wall =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start)
+                    .count();
+            const bool discharging = p.phase != engine::Phase::settle;
+            if (discharging && opened->wall < 0) *opened = {wall, p.sim_time, p.in_hopper};
+            std::string eta = "?";
+            if (discharging && wall > opened->wall) {
+                const double dw = wall - opened->wall;
+                const int gone = opened->in_hopper - p.in_hopper;
+                const double sim_rate = (p.sim_time - opened->sim) / dw;
+                double left = sim_rate > 0 ? (max_time - p.discharge_time) / sim_rate : -1.0;
+                if (gone > 0) {
+                    const double by_flow = p.in_hopper * dw / gone;
+                    left = left < 0 ? by_flow : std::min(left, by_flow);
+                }
+                if (left >= 0) eta = campaign::format_duration(left);
+            }
+            char line[200];
             std::snprintf(line, sizeof line,
                           "campaign: %-9s t_sim = %8.3f s  t_discharge = %8.3f s  in hopper = %d"
-                          "  jams = %d\n",
+                          "  jams = %d  %.3g sim-s/s  elapsed %s  ETA %s\n",
                           std::string(engine::to_string(p.phase)).c_str(), p.sim_time,
-                          p.discharge_time, p.in_hopper, p.n_jams);
+                          p.discharge_time, p.in_hopper, p.n_jams,
+                          wall > 0 ? p.sim_time / wall : 0.0,
+                          campaign::format_duration(wall).c_str(), eta.c_str());
             err << line << std::flush;
         };
     }

@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -74,12 +75,16 @@ struct PointStatus {
     double survival_sum = 0.0;  // s, all intervals
     int emptied = 0;            // realizations with an empty time
     double empty_sum = 0.0;     // s
+    int timed = 0;              // planned realizations with a result (failed included) ...
+    double task_seconds = 0.0;  // ... and their wall-clock seconds on the workers
 };
 
 struct RunSummary {
     RunInfo info;
     std::optional<RunEndRecord> end;  // absent: still running, or killed
     int stored = 0;                   // results recorded by this run
+    // Each worker's (rank's) latest result in this run, s since 1970 (finished_unix).
+    std::map<int, double> last_result_unix;
 };
 
 struct Failure {
