@@ -202,6 +202,7 @@ def plot_jam_rate(st, width):
                                legend_rows=legend_rows(list(st.groups) + ["no jams: tau > bound"] * extra, width))
     any_fit = {"exp": False, "pow": False}
     handles, labels = [], []
+    lowest_rate = []  # the fits' curves must not stretch the rate axis beyond the data
     for g, rows in st.groups.items():
         c, m = st.group_colour[g], st.group_marker[g]
         D, tau, lo, hi, bound_D, bound = [], [], [], [], [], []
@@ -220,6 +221,7 @@ def plot_jam_rate(st, width):
             ax_t.errorbar(D, tau, yerr=[tau - lo, hi - tau], fmt=m, color=c, capsize=2, ms=3)
             ax_r.errorbar(D, 1 / tau, yerr=[1 / tau - 1 / hi, 1 / lo - 1 / tau], fmt=m, color=c,
                           capsize=2, ms=3)
+            lowest_rate.append(float(np.min(1 / hi)))
         if bound:
             ax_t.plot(bound_D, bound, m, color=c, mfc="none", ms=4)
             ax_t.plot(bound_D, bound, "^", color=c, ms=3)
@@ -241,6 +243,8 @@ def plot_jam_rate(st, width):
             any_fit["pow"] = True
     ax_t.set_yscale("log")
     ax_r.set_yscale("log")
+    if lowest_rate:
+        ax_r.set_ylim(bottom=min(lowest_rate) / 3)
     ax_t.set_xlabel("D (cm)")
     ax_r.set_xlabel("D (cm)")
     ax_t.set_ylabel(r"mean survival time $\tau$ (s)")

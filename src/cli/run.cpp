@@ -7,6 +7,7 @@
 
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
+#include "cli/python_tools.hpp"
 #include "hopper/campaign/run.hpp"
 #include "hopper/core/error.hpp"
 
@@ -38,6 +39,8 @@ po::options_description run_options() {
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
+        ("no-plots", po::bool_switch(),
+         "do not draw the figures at the end (campaign plot draws them later)")  //
         ("allow-mixed", po::bool_switch(),
          "accept new points whose settings, not varied by the sweep, differ from the store's "
          "points (refused by default: the fits would pool different physics)")  //
@@ -55,14 +58,16 @@ double non_negative(const char* option, const std::string& text) {
 
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
-          "                    [--threads N] [--flush-interval S] [--allow-mixed]\n"
+          "                    [--threads N] [--flush-interval S] [--allow-mixed] [--no-plots]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
           "other ranks simulate (use one rank more than cores: the master sleeps while waiting).\n"
           "A store whose physics differs from the sweep file's is refused; more points or\n"
           "realizations extend it, unless the new points differ from the stored ones in a\n"
-          "setting the sweep does not vary (refused unless --allow-mixed).\n\n"
+          "setting the sweep does not vary (refused unless --allow-mixed). At the end it\n"
+          "analyzes the store (campaign analyze) and draws the figures into STORE_plots/\n"
+          "(campaign plot; not with --no-plots or HOPPER_PLOTS=0).\n\n"
           "Signals: SIGUSR1 or SIGINT: no new realizations, running ones may finish within\n"
           "--grace seconds; SIGTERM or a second signal: stop running ones now. Either way what\n"
           "finished is stored and the exit code is 4; the same command resumes.\n\n"
@@ -116,7 +121,11 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;
     // At the end of a run that was not stopped: the same analysis as `campaign analyze`.
-    opt.after_run = [](const std::filesystem::path& store, int code) {
+    // Figures at the end unless --no-plots (or HOPPER_PLOTS=0, which the test suite sets so
+    // that its many small runs do not each start Python).
+    const char* env_plots = std::getenv("HOPPER_PLOTS");
+    const bool plots = !vm["no-plots"].as<bool>() && !(env_plots && std::string(env_plots) == "0");
+    opt.after_run = [plots](const std::filesystem::path& store, int code) {
         if (code == campaign::run_stopped) return code;
         std::cout << '\n';
         try {
@@ -129,8 +138,23 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         }
         fs::path out = store;
         out.replace_extension();
-        std::cout << "plots: /usr/bin/python3 analysis/plots.py " << store.string() << " --out "
-                  << out.string() << "_plots\n";
+        const std::string dir = out.string() + "_plots";
+        if (!plots) {
+            std::cout << "figures: campaign plot " << store.string() << " --out " << dir << '\n';
+            std::cout.flush();
+            return code;
+        }
+        // The figures, drawn by analysis/plots.py (a failure here never changes the run's code:
+        // the realizations and the analysis are stored).
+        std::cout << "figures (campaign plot " << store.string() << " --out " << dir << "):\n";
+        try {
+            if (run_python(analysis_dir() / "plots.py", {store.string(), "--out", dir}) != 0)
+                std::cerr << "campaign: note: the figures could not be drawn (see above); the "
+                             "store is complete: retry with `campaign plot "
+                          << store.string() << "`\n";
+        } catch (const std::exception& e) {
+            std::cerr << "campaign: note: no figures: " << e.what() << '\n';
+        }
         std::cout.flush();
         return code;
     };

@@ -10,7 +10,11 @@ for m in matplotlib pandas xarray h5py; do
     "$PY" -c "import $m" 2>/dev/null || { echo "SKIP: python3-$m is missing (./install-deps.sh)"; exit 77; }
 done
 STORE=$WORK/mf.h5
-run_expect 0 run "$EXE" run "$DATA/mini_fields.toml" --store "$STORE" --progress-interval 0 --threads 2
+# campaign run draws the figures at its end
+HOPPER_PLOTS=1 run_expect 0 run "$EXE" run "$DATA/mini_fields.toml" --store "$STORE" --progress-interval 0 --threads 2
+expect_in run.out "figures (campaign plot $STORE --out $WORK/mf_plots):"
+expect_in run.out "$WORK/mf_plots/survival.png"
+[ -s "$WORK/mf_plots/jam_rate.png" ] || fail "campaign run did not draw jam_rate.png"
 run_expect 0 export "$EXE" export "$STORE" --csv "$WORK/csv" --vtk "$WORK/vtk"
 "$PY" "$SRC/tests/analysis/test_hopper_store.py" "$SRC" "$STORE" "$WORK/csv" || fail "test_hopper_store.py"
 [ "$(ls "$WORK"/vtk/*.vti | wc -l)" -eq 6 ] || fail "export --vtk wrote $(ls "$WORK"/vtk | wc -l) files, not 6"

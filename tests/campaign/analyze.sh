@@ -10,7 +10,7 @@
 source "$(dirname "$0")/lib.sh"
 reference
 expect_in ref.out "analysis written to $WORK/ref.h5:/analysis"
-expect_in ref.out "plots: /usr/bin/python3 analysis/plots.py $WORK/ref.h5 --out $WORK/ref_plots"
+expect_in ref.out "figures: campaign plot $WORK/ref.h5 --out $WORK/ref_plots"
 
 run_expect 0 json "$EXE" analyze "$WORK/ref.h5" --json
 "$PY" "$SRC/tests/campaign/check_analysis.py" json.out "$WORK/ref.h5" || fail "check_analysis.py"
