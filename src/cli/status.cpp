@@ -86,7 +86,7 @@ ProgressEstimate estimate_progress(const store::StoreStatus& s, double now_unix)
         pending_cost += c * p.pending;
         pending += p.pending;
     }
-    constexpr double prior = 50e-9;  // s per particle-step (README, "Performance")
+    constexpr double prior = 50e-9;  // s per particle-step (docs/performance.md)
     const double per_cost = cost_done > 0 && seconds_done > 0 ? seconds_done / cost_done : prior;
     e.basis = cost_done > 0 ? "cost model, scaled to the worker time of the stored realizations"
                             : "cost model at 50 ns per particle-step (nothing measured yet)";

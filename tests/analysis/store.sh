@@ -40,6 +40,16 @@ print("\n".join(bad))
 sys.exit(1 if bad else 0)
 PYEOF
 
+# the README's Python example runs as printed (on this store instead of the quickstart's)
+awk '/^<!-- example: tests\/analysis\/store.sh runs this block -->/ {on = 1; next}
+     on && /^```python/ {inside = 1; next} inside && /^```/ {exit} inside {print}' \
+    "$SRC/README.md" >example.py
+[ -s example.py ] || fail "no Python example found in README.md"
+sed -i "s|\"build/quickstart.h5\"|\"$STORE\"|; s|sys.path.insert(0, \"analysis\")|sys.path.insert(0, \"$SRC/analysis\")|" example.py
+rm -f survival.png
+"$PY" example.py || fail "the README's Python example failed"
+[ -s survival.png ] || fail "the README's Python example wrote no survival.png"
+
 run_expect 2 badfmt "$EXE" plot "$STORE" --format png,gif
 expect_in badfmt.err "unknown format 'gif'"
 run_expect 2 nothing "$EXE" export "$STORE"
