@@ -71,26 +71,22 @@ ProgressEstimate estimate_progress(const store::StoreStatus& s, double now_unix)
             // a sweep text this version no longer reads: its points keep the mean cost
         }
     }
-    double known = 0.0, cost_done = 0.0, seconds_done = 0.0, pending_cost = 0.0;
-    int n_known = 0, pending = 0;
-    for (const auto& [label, c] : cost) {
+    double known = 0.0;
+    for (const auto& [label, c] : cost)
         known += c;
-        ++n_known;
-    }
-    const double mean_cost = n_known ? known / n_known : 0.0;
+    const double mean_cost = cost.empty() ? 0.0 : known / static_cast<double>(cost.size());
+    campaign::CostEta eta(e.workers);
+    int pending = 0;
     for (const auto& p : s.points) {
         const auto it = cost.find(p.label);
         const double c = it != cost.end() ? it->second : mean_cost;
-        cost_done += c * p.timed;
-        seconds_done += p.task_seconds;
-        pending_cost += c * p.pending;
+        eta.add_pending(c, p.pending);
+        eta.finished(c, p.task_seconds, p.timed, false);
         pending += p.pending;
     }
-    constexpr double prior = 50e-9;  // s per particle-step (docs/performance.md)
-    const double per_cost = cost_done > 0 && seconds_done > 0 ? seconds_done / cost_done : prior;
-    e.basis = cost_done > 0 ? "cost model, scaled to the worker time of the stored realizations"
-                            : "cost model at 50 ns per particle-step (nothing measured yet)";
-    if (pending > 0 && pending_cost > 0) e.eta_seconds = pending_cost * per_cost / e.workers;
+    e.basis = eta.measured() ? "cost model, scaled to the worker time of the stored realizations"
+                             : "cost model at 50 ns per particle-step (nothing measured yet)";
+    if (pending > 0 && eta.seconds_left() > 0) e.eta_seconds = eta.seconds_left();
     if (s.writer_active && !last.end) {
         for (int rank = 1; rank <= e.workers; ++rank) {
             const auto it = last.last_result_unix.find(rank);

@@ -1,7 +1,7 @@
 #!/bin/bash
 # `campaign analyze` and analysis/plots.py end to end on mini.toml (12 realizations, 3 outlets):
 # - `campaign run` analyzes at the end (/analysis written) and prints the plots command;
-# - `analyze --json` parses, has every key of the README, and agrees with the raw realizations
+# - `analyze --json` parses, has every key of docs/statistics.md, and agrees with the raw realizations
 #   read with h5py (tau = total time / jams, counts, means); a point without jams has
 #   tau_mle null with a reason; the /analysis datasets have units, descriptions, no NaN;
 # - re-analysis replaces the group (same members, one row per point, no duplicates);
