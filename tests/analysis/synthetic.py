@@ -45,8 +45,9 @@ def expand(path):
             sweep[k] = v
     entries = []
     axes = sorted(sweep, key=lambda k: (k not in ("D_cm", "theta_deg"), k != "D_cm", k))
-    for combo in itertools.product(*(sweep[a] for a in axes)):
-        entries.append((dict(zip(axes, combo)), n_real))
+    if sweep or not doc.get("points"):  # neither [sweep] nor [[points]]: the base scene
+        for combo in itertools.product(*(sweep[a] for a in axes)):
+            entries.append((dict(zip(axes, combo)), n_real))
     for p in doc.get("points", []):
         s = {}
         for k, v in p.items():
@@ -71,7 +72,7 @@ def expand(path):
         for w in ("e_n", "mu"):  # walls follow the material unless given
             if "walls." + w not in s and w not in doc.get("walls", {}):
                 scene["walls." + w] = scene["material." + w]
-        out.append((s, scene, max(2, min(n, 6))))
+        out.append((s, scene, max(2, min(n, 6))))  # enough to draw, few enough to be quick
     return out, bool(doc.get("fields", {}).get("enabled", False))
 
 

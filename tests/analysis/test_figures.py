@@ -65,6 +65,12 @@ for path in studies:
             plt.close(fig)
             drawn += 1
     print("%s: %d points, groups %s" % (path.stem, len(store.points), list(store.groups())[:4]))
+    # the synthetic stores have the shipped files' point counts (test_sweep.cpp has them too)
+    expected = {"single-material": 12, "large-outlet-material": 8, "survival": 11,
+                "empty-time": 8, "beverloo-angle": 40, "discharge-curves": 5}
+    if path.stem in expected and len(store.points) != expected[path.stem]:
+        failures.append("%s: %d points, the sweep file has %d" % (path.stem, len(store.points),
+                                                                 expected[path.stem]))
 for f in failures:
     print("FAIL: " + f)
 print("%d figures drawn, %d layout problems" % (drawn, len(failures)))
