@@ -37,17 +37,27 @@ using hopper::cli::single_positional;
 struct Command {
     std::string_view name;
     std::string_view summary;
+    void (*help)(std::ostream&);  // `campaign help <name>`
 };
+
+void print_simulate_help(std::ostream& os);
 
 // The commands this build has.
 constexpr Command commands[] = {
-    {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)"},
-    {"status", "progress and failures of a store (works while a run writes it)"},
-    {"analyze", "statistics and fits of a store, written into its /analysis group"},
-    {"plot", "figures of a store (survival, jam rate, Beverloo, fields; png, pdf, svg)"},
-    {"export", "a store's tables as CSV files and its field maps for ParaView"},
-    {"simulate", "run one realization of one scene of a sweep file (no MPI)"},
-    {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself"},
+    {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)",
+     hopper::cli::print_run_help},
+    {"status", "progress, rate, ETA and failures of a store (works while a run writes it)",
+     hopper::cli::print_status_help},
+    {"analyze", "statistics and fits of a store, written into its /analysis group",
+     hopper::cli::print_analyze_help},
+    {"plot", "figures of a store (survival, jam rate, Beverloo, fields; png, pdf, svg)",
+     hopper::cli::print_plot_help},
+    {"export", "a store's tables as CSV files and its field maps for ParaView",
+     hopper::cli::print_export_help},
+    {"simulate", "run one realization: of a sweep file's scene, or a stored one again",
+     print_simulate_help},
+    {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself",
+     hopper::cli::print_submit_help},
 };
 
 std::string available_commands() {
@@ -200,34 +210,11 @@ int main(int argc, char** argv) {
                 print_usage(std::cout);
                 return 0;
             }
-            if (args[1] == "simulate") {
-                print_simulate_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "run") {
-                hopper::cli::print_run_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "status") {
-                hopper::cli::print_status_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "analyze") {
-                hopper::cli::print_analyze_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "plot") {
-                hopper::cli::print_plot_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "export") {
-                hopper::cli::print_export_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "submit") {
-                hopper::cli::print_submit_help(std::cout);
-                return 0;
-            }
+            for (const auto& c : commands)
+                if (args[1] == c.name) {
+                    c.help(std::cout);
+                    return 0;
+                }
             return error("no help for unknown command '" + args[1] +
                              "' (available: " + available_commands() + ")",
                          exit_usage);
