@@ -383,21 +383,21 @@ class Store:
             return df
         return self._cached("analysis", make)
 
+    def _group_table(self, name):
+        def make():
+            self._require_analysis()
+            return self._table(self._f["analysis/" + name])
+        return self._cached(name, make)
+
     @property
     def beverloo(self):
         """/analysis/beverloo: one row per group (C, k with errors, rho_b, d, reason)."""
-        def make():
-            self._require_analysis()
-            return self._table(self._f["analysis/beverloo"])
-        return self._cached("beverloo", make)
+        return self._group_table("beverloo")
 
     @property
     def jam_rate(self):
         """/analysis/jam_rate: the exponential and power-law fits of the jam rate per group."""
-        def make():
-            self._require_analysis()
-            return self._table(self._f["analysis/jam_rate"])
-        return self._cached("jam_rate", make)
+        return self._group_table("jam_rate")
 
     @property
     def km(self):
