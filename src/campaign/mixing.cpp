@@ -31,7 +31,8 @@ std::map<std::string, std::string> label_settings(const std::string& label) {
     std::map<std::string, std::string> m;
     std::istringstream in(label);
     for (std::string token; in >> token;)
-        if (const auto eq = token.find('='); eq != std::string::npos && token.compare(0, eq, "D_cm"))
+        if (const auto eq = token.find('=');
+            eq != std::string::npos && token.compare(0, eq, "D_cm"))
             m[token.substr(0, eq)] = token.substr(eq + 1);
     return m;
 }

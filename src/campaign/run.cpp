@@ -8,8 +8,8 @@
 #include <thread>
 
 #include "hopper/campaign/inproc_channel.hpp"
-#include "hopper/campaign/mpi.hpp"
 #include "hopper/campaign/mixing.hpp"
+#include "hopper/campaign/mpi.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/signals.hpp"

@@ -1011,7 +1011,7 @@ namespace {
 po::options_description analyze_options() {
     po::options_description d("analyze options");
     d.add_options()("json", po::bool_switch(), "print one JSON object instead of the tables")  //
-        ("no-write", po::bool_switch(), "do not write /analysis into the store")             //
+        ("no-write", po::bool_switch(), "do not write /analysis into the store")               //
         ("help,h", "show this help");
     return d;
 }

@@ -81,17 +81,18 @@ po::options_description simulate_options() {
     po::options_description d("simulate options");
     // Numbers are read as text and checked by cli/options.hpp, so that "-1", "1.5", "nan" get a
     // clear message (Boost's lexical casts would wrap "-1" into a huge unsigned seed).
-    d.add_options()                                                                           //
+    d.add_options()                                                                //
         ("D", po::value<std::string>()->value_name("CM"), "outlet width D in cm")  //
         ("theta", po::value<std::string>()->value_name("DEG"),
          "wall angle to the horizontal in degrees")  //
-        ("seed", po::value<std::string>()->value_name("N"), "random seed, a non-negative integer")  //
+        ("seed", po::value<std::string>()->value_name("N"),
+         "random seed, a non-negative integer")  //
         ("store", po::value<std::string>()->value_name("STORE.h5"),
          "with --point: the store holding the realization")  //
         ("point", po::value<std::string>()->value_name("LABEL"),
          "re-run a stored realization of this point (its label, as `campaign status` lists it)")  //
         ("realization", po::value<std::string>()->value_name("I"),
-         "with --point: the realization's index (0-based)")  //
+         "with --point: the realization's index (0-based)")                          //
         ("json", po::bool_switch(), "print one JSON object instead of the summary")  //
         ("snapshots", po::value<std::string>()->value_name("DIR"),
          "write particle snapshots into DIR: VTK files hopper.NNNNNN.vtu with the series "
@@ -142,11 +143,13 @@ int simulate_command(const std::vector<std::string>& args) {
         for (const char* o : {"D", "theta", "seed", "sweep"})
             if (vm.count(o))
                 throw hopper::core::ConfigError(
-                    std::string(o == std::string("sweep") ? "a sweep file" : "--" + std::string(o)) +
+                    std::string(o == std::string("sweep") ? "a sweep file"
+                                                          : "--" + std::string(o)) +
                     " cannot be given with --point: the store has the point's scene and seed");
         opt.store = required(vm, "store");
         opt.point = vm["point"].as<std::string>();
-        const std::uint64_t r = hopper::cli::parse_seed("--realization", required(vm, "realization"));
+        const std::uint64_t r =
+            hopper::cli::parse_seed("--realization", required(vm, "realization"));
         if (r > 100000000)
             throw hopper::core::ConfigError("--realization " + std::to_string(r) + " is too large");
         opt.realization = static_cast<int>(r);

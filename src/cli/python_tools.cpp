@@ -42,7 +42,7 @@ po::options_description plot_options() {
 
 po::options_description export_options() {
     po::options_description d("export options");
-    d.add_options()  //
+    d.add_options()                                                                              //
         ("csv", po::value<std::string>()->value_name("DIR"), "one CSV file per table into DIR")  //
         ("vtk", po::value<std::string>()->value_name("DIR"),
          "the merged field maps as VTK image data (.vti, ParaView) into DIR")  //
@@ -53,8 +53,7 @@ po::options_description export_options() {
 std::string existing_store(const po::variables_map& vm) {
     const std::string store = single_positional(vm, "store", "store", "STORE.h5");
     std::error_code ec;
-    if (!fs::exists(store, ec))
-        throw core::ConfigError("no store at '" + store + "'");
+    if (!fs::exists(store, ec)) throw core::ConfigError("no store at '" + store + "'");
     return store;
 }
 
@@ -74,8 +73,9 @@ int run_python(const fs::path& script, const std::vector<std::string>& args) {
     const fs::path python = python_interpreter();
     std::error_code ec;
     if (!fs::exists(python, ec))
-        throw std::runtime_error("no Python interpreter at '" + python.string() +
-                                 "' (install python3 with ./install-deps.sh, or set HOPPER_PYTHON)");
+        throw std::runtime_error(
+            "no Python interpreter at '" + python.string() +
+            "' (install python3 with ./install-deps.sh, or set HOPPER_PYTHON)");
     if (!fs::exists(script, ec))
         throw std::runtime_error("no script '" + script.string() +
                                  "' (set HOPPER_ANALYSIS_DIR to the source tree's analysis/)");
@@ -188,7 +188,8 @@ int export_command(const std::vector<std::string>& args) {
     for (const char* opt : {"csv", "vtk"})
         if (vm.count(opt)) {
             const std::string& dir = vm[opt].as<std::string>();
-            if (dir.empty()) throw core::ConfigError(std::string("--") + opt + " must not be empty");
+            if (dir.empty())
+                throw core::ConfigError(std::string("--") + opt + " must not be empty");
             py.insert(py.end(), {std::string("--") + opt, dir});
         }
     return run_python(analysis_dir() / "export.py", py);

@@ -2,8 +2,8 @@
 
 #include <atomic>
 #include <chrono>
-#include <memory>
 #include <cstdio>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -12,9 +12,9 @@
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/config/sweep.hpp"
-#include "hopper/store/store.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/engine/realization.hpp"
+#include "hopper/store/store.hpp"
 
 namespace hopper::cli {
 
@@ -45,8 +45,8 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
         for (const auto& q : sweep.campaign.points) {
             if (q.label != label) continue;
             if (campaign::scene_text(q.scene) != p->scene) break;
-            return {q.scene, p->seeds[static_cast<std::size_t>(realization)], p->D_cm,
-                    p->theta_deg, r->info.sweep_path};
+            return {q.scene, p->seeds[static_cast<std::size_t>(realization)], p->D_cm, p->theta_deg,
+                    r->info.sweep_path};
         }
     }
     throw core::ConfigError("--point '" + label + "': none of the " +
@@ -134,9 +134,9 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
     if (!snapshot_error.empty())
         throw std::runtime_error("snapshots stopped the run: " + snapshot_error);
 
-    const RunRequest req = stored ? RunRequest{stored->sweep_path, stored->D_cm,
-                                               stored->theta_deg, seed}
-                                  : RunRequest{opt.sweep.string(), opt.D_cm, opt.theta_deg, seed};
+    const RunRequest req =
+        stored ? RunRequest{stored->sweep_path, stored->D_cm, stored->theta_deg, seed}
+               : RunRequest{opt.sweep.string(), opt.D_cm, opt.theta_deg, seed};
     if (opt.json) {
         out << result_json(req, result) << '\n';
     } else {

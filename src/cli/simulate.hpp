@@ -33,7 +33,7 @@ struct SimulateOptions {
     std::uint64_t seed = 0;
     bool json = false;
     std::optional<std::filesystem::path> snapshot_dir;
-    double snapshot_interval = 0.05;  // s of simulated time
+    double snapshot_interval = 0.05;   // s of simulated time
     SnapshotFormats snapshot_formats;  // default: both vtu and dump
     bool progress = false;
     double progress_interval = 0.5;  // s of simulated time

@@ -130,12 +130,14 @@ SnapshotFormats parse_snapshot_formats(const std::string& text) {
     std::size_t begin = 0;
     while (true) {
         const std::size_t comma = text.find(',', begin);
-        const std::string one = text.substr(begin, comma == std::string::npos ? comma : comma - begin);
+        const std::string one =
+            text.substr(begin, comma == std::string::npos ? comma : comma - begin);
         bool& flag = one == "vtu" ? f.vtu : f.dump;
         if ((one != "vtu" && one != "dump") || flag)
             throw core::ConfigError("--snapshot-format: " +
-                                    (one == "vtu" || one == "dump" ? "'" + one + "' given twice"
-                                                                   : "unknown format '" + one + "'") +
+                                    (one == "vtu" || one == "dump"
+                                         ? "'" + one + "' given twice"
+                                         : "unknown format '" + one + "'") +
                                     " in '" + text + "' (allowed: vtu, dump or vtu,dump)");
         flag = true;
         if (comma == std::string::npos) break;

@@ -57,8 +57,7 @@ inline constexpr std::int64_t wall_id_base = 1'000'000'000;
 
 // Writes one frame in the format above. Throws std::invalid_argument when the snapshot's columns
 // have inconsistent lengths or a mobile id would collide with the wall ids.
-void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t step,
-                const DumpBox& box);
+void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t step, const DumpBox& box);
 
 struct SnapshotFormats {
     bool vtu = true;

@@ -4,14 +4,14 @@
 #include <boost/program_options.hpp>
 #include <cstdio>
 #include <ctime>
-#include <map>
 #include <iostream>
+#include <map>
 
 #include "cli/json_writer.hpp"
-#include "hopper/core/error.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/config/sweep.hpp"
+#include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
 
 namespace po = boost::program_options;

@@ -47,9 +47,10 @@ void write_vtu(std::ostream& os, const engine::Snapshot& s, std::int64_t step) {
     const std::size_t nm = s.id.size(), nw = s.wall_x.size(), n = nm + nw;
     std::string out;
     out.reserve(512 + n * 160);
-    out += "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
-           "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n"
-           "    <FieldData>\n";
+    out +=
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+        "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n"
+        "    <FieldData>\n";
     data_array(out, "Float64", "TIME", 1, [&] { number(out, s.sim_time); });
     data_array(out, "Int64", "TIMESTEP", 1, [&] { integer(out, step); });
     out += "    </FieldData>\n    <Piece NumberOfPoints=\"" + std::to_string(n) +
@@ -116,8 +117,9 @@ void write_vtu(std::ostream& os, const engine::Snapshot& s, std::int64_t step) {
 }
 
 void write_pvd(std::ostream& os, const std::vector<PvdEntry>& frames) {
-    std::string out = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\">\n"
-                      "  <Collection>\n";
+    std::string out =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\">\n"
+        "  <Collection>\n";
     for (const auto& f : frames) {
         out += "    <DataSet timestep=\"";
         std::array<char, 32> buf{};

@@ -184,9 +184,10 @@ TEST(SnapshotWriter, WritesVtuFramesAndTheirSeries) {
     for (const auto& l : pvd)
         all += l + "\n";
     EXPECT_NE(all.find("timestep=\"1.25\" part=\"0\" file=\"hopper.000000.vtu\""),
-              std::string::npos) << all;
-    EXPECT_NE(all.find("timestep=\"1.3\" part=\"0\" file=\"hopper.000001.vtu\""),
-              std::string::npos) << all;
+              std::string::npos)
+        << all;
+    EXPECT_NE(all.find("timestep=\"1.3\" part=\"0\" file=\"hopper.000001.vtu\""), std::string::npos)
+        << all;
 }
 
 TEST(SnapshotWriter, ParsesFormats) {
