@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libboost-program-options-dev libtomlplusplus-dev
   libhdf5-dev hdf5-tools libopenmpi-dev openmpi-bin
   libgtest-dev googletest
-  python3 python3-numpy python3-scipy python3-matplotlib python3-h5py
+  python3 python3-numpy python3-scipy python3-matplotlib python3-h5py python3-pandas python3-xarray
   slurm-wlm munge  # the local single-node Slurm of the `slurm` tests (slurm/slurm-up.sh)
 )
 

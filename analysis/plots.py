@@ -1,30 +1,36 @@
 #!/usr/bin/python3
-"""Figures of a campaign store (after `campaign analyze`, which `campaign run` does at the end).
+"""Figures of a campaign store for papers (`campaign plot` calls this; after `campaign analyze`,
+which `campaign run` does at its end).
 
-usage: /usr/bin/python3 analysis/plots.py STORE.h5 --out DIR
+usage: /usr/bin/python3 analysis/plots.py STORE.h5 --out DIR [--format png,pdf,svg]
+           [--width column|page]
            [--compare LABEL_A LABEL_B [--field vx|vy|speed|pressure] [--compare-out PATH]]
 
-Writes into DIR (created if needed):
-  survival.png     survival-time distribution per point: Kaplan-Meier curve (log scale) with its
-                   Greenwood band and the fitted exponential exp(-t/tau), tau the censored MLE
-  jam_onsets.png   every jam's onset (discharge time) per realization, per wall angle, with the
-                   early/late test's p-value per outlet
-  beverloo.png     mass flow rate versus outlet D with the Beverloo fits, and k versus theta
-  in_hopper.png    particles in the hopper versus discharge time, per wall angle
-  fields_<label>.png  per point with fields (/analysis/fields): the mean and the fluctuation
-                   (standard deviation over windows) of vx, vy, speed and pressure, walls drawn,
-                   cells without data white
-  fields_compare.png  with --compare A B: one field (--field, default speed) of points A and B
-                   side by side on shared colour scales (e.g. the cell and the Gaussian kernel)
-and prints the files it wrote. Reads the raw realizations from /realizations and /ragged and the
-fits from /analysis (README, "Analysis"). Needs Debian's python3-h5py, -numpy and -matplotlib.
-Exit codes: 0 figures written, 2 bad arguments or a store without /analysis, 1 other errors.
+Points are grouped by the settings that vary between them other than the outlet D (the wall
+angle, a material setting, ...; read from each point's scene text, so settings that differ
+without being in the labels count too); legends and titles name only those settings. Writes
+into DIR, in every format asked for (default png):
+  survival     per group, the Kaplan-Meier survival function of every outlet overlaid (log
+               scale) with its exponential fit exp(-t/tau), tau the censored MLE
+  jam_rate     tau (with its 95 % interval) and the jam rate 1/tau versus D per group, with the
+               exponential and power-law fits of the rate where the analysis has them
+  beverloo     mass flow rate versus D with the Beverloo fit per group, and the empty time
+               versus D
+  k_theta      the Beverloo k versus the wall angle (one series per other varied setting)
+  in_hopper    particles in the hopper versus discharge time per group, coloured by D
+  jam_onsets   every jam's onset versus elapsed discharge time per group and outlet
+  fields_<label>  per point with fields: mean and fluctuation maps of vx, vy, speed, pressure
+  fields_compare  with --compare A B: one field of two points side by side on shared scales
+and prints the files it wrote. Sizes: --width page (7 in, two journal columns; default) or
+column (3.4 in); text 7-8 pt at that size. Needs Debian's python3-h5py, -numpy, -pandas,
+-matplotlib (and -xarray for fields). Exit codes: 0 figures written, 2 bad arguments or a store
+without /analysis, 1 other errors.
 """
 import argparse
+import math
 import os
 import sys
 
-import h5py
 import numpy as np
 
 import matplotlib
@@ -32,7 +38,16 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hopper_store import open_store, setting_text  # noqa: E402
+
 G = 9.80665  # m/s^2, as hopper::core::standard_gravity
+WIDTHS = {"page": 7.0, "column": 3.4}  # inches: two journal columns, one
+FORMATS = ("png", "pdf", "svg")
+STYLE = {"font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "xtick.labelsize": 7,
+         "ytick.labelsize": 7, "legend.fontsize": 7, "figure.titlesize": 9,
+         "legend.frameon": False, "axes.spines.top": False, "axes.spines.right": False,
+         "savefig.dpi": 200, "lines.linewidth": 1.2, "lines.markersize": 4}
 
 
 def fail(msg, code=2):
@@ -40,299 +55,399 @@ def fail(msg, code=2):
     sys.exit(code)
 
 
-class Store:
-    """The parts of a store the figures need."""
+# ----- the study: points grouped by their varied settings -------------------------------------
 
-    def __init__(self, path):
-        self.f = h5py.File(path, "r")
-        f = self.f
-        if "analysis" not in f or "points" not in f["analysis"]:
-            fail("'%s' has no /analysis group: run `campaign analyze %s` first" % (path, path))
-        self.name = f.attrs.get("campaign_name", "")
-        self.a = f["analysis"]
-        ap = self.a["points"]
-        self.labels = list(ap["label"].asstr()[:])
-        self.groups = list(ap["group"].asstr()[:])
-        self.D = ap["D_cm"][:]
-        self.theta = ap["theta_deg"][:]
-        self.col = {k: ap[k][:] for k in ap if k not in ("label", "group")}
-        # /analysis/points rows are in /points order: map the store's point index to them.
-        store_labels = list(f["points/label"].asstr()[:])
-        row = {lab: i for i, lab in enumerate(self.labels)}
-        self.point_row = np.array([row.get(lab, -1) for lab in store_labels])
-        r = f["realizations"]
-        self.r_point = self.point_row[r["point"][:]] if r["point"].shape[0] else np.zeros(0, int)
-        status = h5py.check_enum_dtype(r["status"].dtype)
-        names = {v: k for k, v in status.items()}
-        self.r_status = np.array([names[s] for s in r["status"][:]])
-        self.r_rate_kg = r["discharge_rate_mass"][:]
-        self.r_has_rate = r["has_discharge_rate"][:].astype(bool)
-        self.r_particles = r["particles"][:]
+class Study:
+    """What every figure needs: the points grouped by the settings that vary other than D, one
+    colour per outlet D (the same in every figure) and per group, and the analysis rows."""
 
-    def ragged(self, family, name, i):
-        r = self.f["realizations"]
-        s, n = r[family + "_start"][i], r[family + "_length"][i]
-        return self.f["ragged/" + name][s:s + n]
+    def __init__(self, store):
+        self.s = store
+        self.points = store.points
+        self.groups = store.groups()  # {group text: [points by D]}
+        self.a = store.analysis
+        self.Ds = sorted(set(float(d) for d in self.points["D_cm"]))
+        cmap = plt.get_cmap("viridis")
+        n = len(self.Ds)
+        self.D_colour = {d: cmap(0.85 * k / max(1, n - 1)) for k, d in enumerate(self.Ds)}
+        self.group_colour = {g: "C%d" % (k % 10) for k, g in enumerate(self.groups)}
+        self.group_marker = {g: "osD^v<>ph*"[k % 10] for k, g in enumerate(self.groups)}
+        # /analysis fits are per the analysis's own group (from the labels): the row of each
+        # of our groups is that of its first point
+        self.analysis_group = {g: str(self.a.at[rows[0], "group"]) if rows[0] in self.a.index
+                               else "" for g, rows in self.groups.items()}
 
-    def get(self, key, i):
-        """Value of /analysis/points/<key> for row i, or None when has_<key> is FALSE."""
-        if "has_" + key in self.col and not self.col["has_" + key][i]:
+    def get(self, point, key):
+        """An /analysis/points value, or None when missing."""
+        if point not in self.a.index or key not in self.a:
             return None
-        return self.col[key][i]
+        v = self.a.at[point, key]
+        if v is None or (isinstance(v, float) and math.isnan(v)):
+            return None
+        return v
 
-    def realizations_of(self, i):
-        return [k for k in range(len(self.r_point)) if self.r_point[k] == i and
-                self.r_status[k] != "failed"]
+    def fit_row(self, table, group):
+        df = getattr(self.s, table)
+        rows = df.index[df["group"] == self.analysis_group[group]]
+        return df.loc[rows[0]] if len(rows) else None
 
-    def group_order(self):
-        """Groups (theta and other varied settings) in order of first appearance."""
-        seen = []
-        for g in self.groups:
-            if g not in seen:
-                seen.append(g)
-        return seen
-
-
-def grid(n, width=4.2, height=3.4, max_cols=4):
-    cols = max(1, min(max_cols, n))
-    rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
-    for ax in axes.flat[n:]:
-        ax.set_visible(False)
-    return fig, list(axes.flat[:n])
+    def title(self, group):
+        return group or self.s.name
 
 
-def plot_survival(st, out):
-    n = len(st.labels)
-    fig, axes = grid(n)
-    km = st.a["km"]
-    for i, ax in enumerate(axes):
-        s0, ln = st.col["km_start"][i], st.col["km_length"][i]
-        t, surv, se = km["time"][s0:s0 + ln], km["survival"][s0:s0 + ln], km["std_err"][s0:s0 + ln]
-        tau, lo, hi = st.get("tau_mle", i), st.get("tau_ci95_lo", i), st.get("tau_ci95_hi", i)
-        p, jams = st.get("gof_p", i), int(st.col["n_jams"][i])
-        tmax = st.col["total_observed_time"][i]
-        # the longest observed interval bounds where S_KM is known
-        longest = 0.0
-        for k in st.realizations_of(i):
-            x = st.ragged("survival", "survival_times", k)
-            if len(x):
-                longest = max(longest, float(np.max(x)))
-        if ln:
-            ts = np.concatenate([[0.0], t, [max(longest, t[-1])]])
-            ss = np.concatenate([[1.0], surv, [surv[-1]]])
-            ok = ss > 0
-            ax.step(ts[ok], ss[ok], where="post", color="C0", label="Kaplan-Meier")
-            band_lo = np.clip(surv - 1.96 * se, 1e-6, None)
-            band_hi = np.clip(surv + 1.96 * se, None, 1.0)
-            ax.fill_between(t, band_lo, band_hi, step="post", color="C0", alpha=0.2,
-                            label="95 % Greenwood band")
-        if tau is not None:
-            tt = np.linspace(0, max(longest, 1e-9), 200)
-            ax.plot(tt, np.exp(-tt / tau), "C3--",
-                    label=r"exp($-t/\tau$), $\tau$ = %.3g s [%.3g, %.3g]" % (tau, lo, hi))
-        else:
-            bound = st.get("tau_lower_bound95", i)
-            msg = "no jams in %.3g s of flow" % tmax
-            if bound is not None:
-                msg += "\n" + r"$\tau$ > %.3g s (95 %%)" % bound
-            ax.text(0.5, 0.5, msg, transform=ax.transAxes, ha="center", va="center")
-        ax.set_yscale("log")
-        ax.set_ylim(bottom=max(1e-3, 0.5 / max(1, int(st.col["n_intervals"][i]))), top=1.5)
-        ax.set_xlabel("survival time t (s of discharge)")
-        ax.set_ylabel("S(t), fraction still flowing")
-        ptxt = "p = %.3f" % p if p is not None else "p: too few jams"
-        ax.set_title("%s\n%d jams, %d realizations, GoF %s" % (
-            st.labels[i], jams, int(st.col["realizations"][i]), ptxt), fontsize=9)
-        if ln or tau is not None:
-            ax.legend(fontsize=7, loc="lower left")
-    fig.suptitle("Survival-time distributions (%s)" % st.name)
-    fig.tight_layout()
-    path = os.path.join(out, "survival.png")
-    fig.savefig(path, dpi=110)
+def D_text(d):
+    return "D = %g cm" % d
+
+
+def layout(study, n_panels, width, panel_h=2.0, max_cols=2, legend_rows=0):
+    """A figure of n panels at the requested width and, below them, a strip for a shared legend
+    of `legend_rows` rows (an axes without frame, so that the constrained layout makes room)."""
+    cols = 1 if width < 5 else max(1, min(max_cols, n_panels))
+    rows = (n_panels + cols - 1) // cols
+    strip = 0.22 * legend_rows + 0.05 if legend_rows else 0.0
+    fig = plt.figure(figsize=(width, rows * panel_h + strip + 0.2), layout="constrained")
+    gs = fig.add_gridspec(rows + (1 if strip else 0), cols,
+                          height_ratios=[panel_h] * rows + ([strip] if strip else []))
+    axes = [fig.add_subplot(gs[k // cols, k % cols]) for k in range(n_panels)]
+    if strip:
+        fig.legend_ax = fig.add_subplot(gs[rows, :])
+        fig.legend_ax.axis("off")
+    return fig, axes
+
+
+def legend_columns(width, labels):
+    """Columns of a shared legend whose entries fit the width (7 pt text is about 0.055 in a
+    character; the handle and the gap take about 0.45 in)."""
+    longest = max((len(str(t)) for t in labels), default=10)
+    return max(1, int((width - 0.1) / (0.055 * longest + 0.45)))
+
+
+def shared_legend(fig, handles, labels, width):
+    """One legend for the whole figure, in the strip below the panels."""
+    if not handles or not hasattr(fig, "legend_ax"):
+        return
+    fig.legend_ax.legend(handles, labels, loc="center",
+                         ncol=min(len(handles), legend_columns(width, labels)),
+                         handlelength=1.6, columnspacing=1.0, borderaxespad=0.0)
+
+
+def legend_rows(labels, width):
+    """Rows the shared legend of these entries takes."""
+    n = len(labels)
+    return (n + legend_columns(width, labels) - 1) // legend_columns(width, labels)
+
+
+def D_legend(study, Ds, extra=()):
+    hs = [plt.Line2D([], [], color=study.D_colour[d], marker="o", ms=3, lw=1) for d in Ds]
+    return hs + [e[0] for e in extra], [D_text(d) for d in Ds] + [e[1] for e in extra]
+
+
+def save(fig, out, name, formats):
+    paths = []
+    for fmt in formats:
+        path = os.path.join(out, "%s.%s" % (name, fmt))
+        fig.savefig(path)
+        paths.append(path)
     plt.close(fig)
-    return path
+    return paths
 
 
-def plot_jam_onsets(st, out):
-    groups = st.group_order()
-    fig, axes = grid(len(groups), width=6.0, height=4.0, max_cols=2)
-    for ax, g in zip(axes, groups):
-        rows = [i for i in range(len(st.labels)) if st.groups[i] == g]
-        rows.sort(key=lambda i: st.D[i])
-        yticks, ylabels = [], []
-        for y, i in enumerate(rows):
-            reals = st.realizations_of(i)
-            for j, k in enumerate(reals):
-                yy = y + (j + 0.5) / max(1, len(reals)) * 0.8 - 0.4
-                end = 0.0
-                ev_t = st.ragged("event", "event_time", k)
-                if len(ev_t):
-                    end = float(np.max(ev_t))
-                ax.plot([0, end], [yy, yy], color="0.85", lw=1, zorder=1)
-                on = st.ragged("jam", "jam_onsets", k)
-                ax.plot(on, np.full(len(on), yy), "v", color="C3", ms=5, zorder=2)
-            p = st.get("early_late_p", i)
-            yticks.append(y)
-            ylabels.append("D = %g cm\n%d jams%s" % (st.D[i], int(st.col["n_jams"][i]),
-                                                    ", early/late p = %.2f" % p if p is not None
-                                                    else ""))
-        ax.set_yticks(yticks)
-        ax.set_yticklabels(ylabels, fontsize=7)
-        ax.set_xlabel("elapsed discharge time at jam onset (s; shaking excluded)")
-        ax.set_title("Jam onsets, %s (grey: each realization's discharge)" % g, fontsize=9)
-        ax.set_ylim(-0.6, len(rows) - 0.4)
-    fig.suptitle("Jam onsets versus elapsed time (%s)" % st.name)
-    fig.tight_layout()
-    path = os.path.join(out, "jam_onsets.png")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+# ----- survival --------------------------------------------------------------------------------
 
-
-def plot_beverloo(st, out):
-    b = st.a["beverloo"]
-    groups = list(b["group"].asstr()[:])
-    fig, (ax, axk) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for gi, g in enumerate(groups):
-        color = "C%d" % (gi % 10)
-        rows = [i for i in range(len(st.labels)) if st.groups[i] == g]
-        # each realization
+def plot_survival(st, width):
+    fig, axes = layout(st, len(st.groups), width, panel_h=2.1,
+                       legend_rows=legend_rows([D_text(d) for d in st.Ds] + ["exp(-t/tau)"], width))
+    km = st.s.km
+    surv = st.s.survival
+    used = set()
+    for ax, (g, rows) in zip(axes, st.groups.items()):
+        lowest = 1.0
         for i in rows:
-            ks = [k for k in st.realizations_of(i) if st.r_has_rate[k]]
-            ax.plot(np.full(len(ks), st.D[i]), st.r_rate_kg[ks] * 1e3, ".", color=color,
-                    alpha=0.35, ms=4)
-        Ds = np.array([st.D[i] for i in rows if st.get("discharge_rate_kg_s", i) is not None])
-        W = np.array([st.get("discharge_rate_kg_s", i) for i in rows
-                      if st.get("discharge_rate_kg_s", i) is not None])
-        We = np.array([st.get("discharge_rate_kg_s_err", i) or 0.0 for i in rows
-                       if st.get("discharge_rate_kg_s", i) is not None])
-        ax.errorbar(Ds, W * 1e3, yerr=We * 1e3, fmt="o", color=color, capsize=3,
-                    label="%s: mean +- s.e." % g)
-        if b["has_C"][gi]:
-            C, k, rho_b, d = b["C"][gi], b["k"][gi], b["rho_b"][gi], b["d"][gi]
-            lo = max(k * d * 100 * 1.001, 0.0)
-            DD = np.linspace(lo, max(Ds.max() * 1.1, lo * 1.5), 200)
-            WW = C * rho_b * np.sqrt(G) * np.clip(DD / 100 - k * d, 0, None) ** 1.5
-            ax.plot(DD, WW * 1e3, "-", color=color,
-                    label="Beverloo C = %.3f +- %.2g, k = %.2f +- %.2g" % (
-                        C, b["C_err"][gi], k, b["k_err"][gi]))
-        else:
-            ax.plot([], [], " ", label="%s: no fit (%s)" % (g, b["reason"].asstr()[gi]))
-    ax.set_xlabel("outlet width D (cm)")
-    ax.set_ylabel("mass flow rate W (g/s, per disk layer)")
-    rho = b["rho_b"][0] if len(groups) else 0.0
-    ax.set_title("Flow rate vs D; rho_b = %.3g kg/m$^2$ (estimate: 0.82 x rho h)" % rho,
-                 fontsize=9)
-    ax.legend(fontsize=7)
-    ax.set_xlim(left=0)
-    ax.set_ylim(bottom=0)
-    th = b["theta_deg"][:]
-    ok = b["has_k"][:].astype(bool)
-    if ok.any():
-        axk.errorbar(th[ok], b["k"][ok], yerr=b["k_err"][ok], fmt="o-", capsize=3)
-    if (~ok).any():
-        axk.text(0.5, 0.5, "no Beverloo fit at theta = %s deg\n(%s)" % (
-            ", ".join("%g" % t for t in th[~ok]), b["reason"].asstr()[np.argmax(~ok)]),
-            transform=axk.transAxes, ha="center", va="center", fontsize=8)
-    axk.set_xlabel("wall angle theta (deg)")
-    axk.set_ylabel("Beverloo k (in mean diameters d = %.3g mm)" % (
-        b["d"][0] * 1e3 if len(groups) else 0.0))
-    axk.set_title("k versus theta", fontsize=9)
-    fig.suptitle("Beverloo fits (%s)" % st.name)
-    fig.tight_layout()
-    path = os.path.join(out, "beverloo.png")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
-def plot_in_hopper(st, out):
-    groups = st.group_order()
-    fig, axes = grid(len(groups), width=6.0, height=4.0, max_cols=2)
-    for ax, g in zip(axes, groups):
-        rows = sorted([i for i in range(len(st.labels)) if st.groups[i] == g],
-                      key=lambda i: st.D[i])
-        for ci, i in enumerate(rows):
-            color = "C%d" % (ci % 10)
-            for j, k in enumerate(st.realizations_of(i)):
-                t = st.ragged("curve", "curve_time", k)
-                c = st.ragged("curve", "curve_in_hopper", k)
-                ax.plot(t, c, color=color, lw=1, alpha=0.7,
-                        label="D = %g cm" % st.D[i] if j == 0 else None)
-        ax.set_xlabel("discharge time (s; shaking excluded)")
-        ax.set_ylabel("particles in the hopper")
-        ax.set_title("Particles in the hopper, %s (one line per realization)" % g, fontsize=9)
-        ax.set_ylim(bottom=0)
+            d = float(st.points.at[i, "D_cm"])
+            c = st.D_colour[d]
+            k = km[km["point"] == i]
+            longest = float(surv.loc[surv["point"] == i, "duration"].max()) \
+                if (surv["point"] == i).any() else 0.0
+            if len(k):
+                ts = np.concatenate([[0.0], k["time"], [max(longest, k["time"].iloc[-1])]])
+                ss = np.concatenate([[1.0], k["survival"], [k["survival"].iloc[-1]]])
+                ok = ss > 0
+                ax.step(ts[ok], ss[ok], where="post", color=c)
+                if ok.any():
+                    lowest = min(lowest, float(ss[ok].min()))
+                used.add(d)
+            tau = st.get(i, "tau_mle")
+            if tau is not None and longest > 0:
+                tt = np.linspace(0, longest, 100)
+                ax.plot(tt, np.exp(-tt / tau), "--", color=c, lw=0.9)
+        ax.set_yscale("log")
+        ax.set_ylim(max(1e-3, lowest * 0.5), 1.2)
         ax.set_xlim(left=0)
-        ax.legend(fontsize=7)
-    fig.suptitle("Discharge curves (%s)" % st.name)
-    fig.tight_layout()
-    path = os.path.join(out, "in_hopper.png")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+        ax.set_xlabel("t (s of discharge)")
+        ax.set_ylabel("S(t)")
+        if g:
+            ax.set_title(g)
+    handles, labels = D_legend(st, [d for d in st.Ds if d in used],
+                               [(plt.Line2D([], [], color="0.3", ls="--", lw=0.9),
+                                 r"exp($-t/\tau$)")])
+    shared_legend(fig, handles, labels, width)
+    return fig
 
 
-# ----- coarse-grained fields (issue 7) ------------------------------------------------------------
+# ----- tau and the jam rate versus D -----------------------------------------------------------
 
-# name in /analysis/fields, symbol, colour map of the mean, its scale: "centred" (diverging,
-# symmetric about 0), "log" (sequential, logarithmic: the outlet jet is ~10x faster than the bulk)
-# or "linear" (sequential from 0). Fluctuations: sequential from 0.
+def plot_jam_rate(st, width):
+    extra = 3
+    fig, (ax_t, ax_r) = layout(st, 2, width, panel_h=2.3,
+                               legend_rows=legend_rows(list(st.groups) + ["no jams: tau > bound"] * extra, width))
+    any_fit = {"exp": False, "pow": False}
+    handles, labels = [], []
+    lowest_rate = []  # the fits' curves must not stretch the rate axis beyond the data
+    for g, rows in st.groups.items():
+        c, m = st.group_colour[g], st.group_marker[g]
+        D, tau, lo, hi, bound_D, bound = [], [], [], [], [], []
+        for i in rows:
+            t = st.get(i, "tau_mle")
+            if t is not None:
+                D.append(float(st.points.at[i, "D_cm"]))
+                tau.append(t)
+                lo.append(st.get(i, "tau_ci95_lo") or t)
+                hi.append(st.get(i, "tau_ci95_hi") or t)
+            elif st.get(i, "tau_lower_bound95") is not None:
+                bound_D.append(float(st.points.at[i, "D_cm"]))
+                bound.append(st.get(i, "tau_lower_bound95"))
+        D, tau, lo, hi = map(np.array, (D, tau, lo, hi))
+        if len(D):
+            ax_t.errorbar(D, tau, yerr=[tau - lo, hi - tau], fmt=m, color=c, capsize=2, ms=3)
+            ax_r.errorbar(D, 1 / tau, yerr=[1 / tau - 1 / hi, 1 / lo - 1 / tau], fmt=m, color=c,
+                          capsize=2, ms=3)
+            lowest_rate.append(float(np.min(1 / hi)))
+        if bound:
+            ax_t.plot(bound_D, bound, m, color=c, mfc="none", ms=4)
+            ax_t.plot(bound_D, bound, "^", color=c, ms=3)
+        handles.append(plt.Line2D([], [], color=c, marker=m, ls="none", ms=3))
+        labels.append(g or "all points")
+        fit = st.fit_row("jam_rate", g) if st.s.has_analysis else None
+        Dall = np.array([float(st.points.at[i, "D_cm"]) for i in rows])
+        if fit is None or not len(Dall):
+            continue
+        DD = np.linspace(Dall.min(), Dall.max(), 100)
+        if not _missing(fit.get("exp_B")):
+            rate = np.exp(fit["exp_ln_A"] - fit["exp_B"] * DD / 100)
+            ax_r.plot(DD, rate, "-", color=c, lw=0.9)
+            any_fit["exp"] = True
+        if not _missing(fit.get("pow_gamma")) and not _missing(fit.get("pow_Dc")):
+            DDp = DD[DD / 100 < fit["pow_Dc"]]
+            rate = np.exp(fit["pow_ln_A"] + fit["pow_gamma"] * np.log(fit["pow_Dc"] - DDp / 100))
+            ax_r.plot(DDp, rate, ":", color=c, lw=1.1)
+            any_fit["pow"] = True
+    ax_t.set_yscale("log")
+    ax_r.set_yscale("log")
+    if lowest_rate:
+        ax_r.set_ylim(bottom=min(lowest_rate) / 3)
+    ax_t.set_xlabel("D (cm)")
+    ax_r.set_xlabel("D (cm)")
+    ax_t.set_ylabel(r"mean survival time $\tau$ (s)")
+    ax_r.set_ylabel(r"jam rate $1/\tau$ (1/s)")
+    if any_fit["exp"]:
+        handles.append(plt.Line2D([], [], color="0.3", ls="-", lw=0.9))
+        labels.append("exponential fit")
+    if any_fit["pow"]:
+        handles.append(plt.Line2D([], [], color="0.3", ls=":", lw=1.1))
+        labels.append("power-law fit")
+    handles.append(plt.Line2D([], [], color="0.3", marker="^", ls="none", ms=3))
+    labels.append(r"no jams: $\tau$ > bound")
+    shared_legend(fig, handles, labels, width)
+    return fig
+
+
+def _missing(v):
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
+# ----- flow rate (Beverloo) and empty time versus D -------------------------------------------
+
+def plot_beverloo(st, width):
+    fig, (ax_w, ax_e) = layout(st, 2, width, panel_h=2.3,
+                               legend_rows=legend_rows(list(st.groups) + ["Beverloo fit"], width))
+    handles, labels = [], []
+    real = st.s.realizations
+    for g, rows in st.groups.items():
+        c, m = st.group_colour[g], st.group_marker[g]
+        D = np.array([float(st.points.at[i, "D_cm"]) for i in rows])
+        W = np.array([st.get(i, "discharge_rate_kg_s") or np.nan for i in rows])
+        We = np.array([st.get(i, "discharge_rate_kg_s_err") or 0.0 for i in rows])
+        E = np.array([st.get(i, "empty_time_mean") or np.nan for i in rows])
+        Ee = np.array([st.get(i, "empty_time_err") or 0.0 for i in rows])
+        for i in rows:  # each realization, faint
+            r = real[(real["point"] == i) & (real["status"] != "failed")]
+            ax_w.plot(np.full(len(r), float(st.points.at[i, "D_cm"])),
+                      r["discharge_rate_mass"] * 1e3, ".", color=c, alpha=0.3, ms=2)
+        ok = np.isfinite(W)
+        ax_w.errorbar(D[ok], W[ok] * 1e3, yerr=We[ok] * 1e3, fmt=m, color=c, capsize=2, ms=3)
+        ok = np.isfinite(E)
+        ax_e.errorbar(D[ok], E[ok], yerr=Ee[ok], fmt=m + "-", color=c, capsize=2, ms=3, lw=0.8)
+        handles.append(plt.Line2D([], [], color=c, marker=m, ls="none", ms=3))
+        labels.append(g or "all points")
+        fit = st.fit_row("beverloo", g) if st.s.has_analysis else None
+        if fit is not None and not _missing(fit.get("C")) and len(D):
+            C, k, rho_b, d = fit["C"], fit["k"], fit["rho_b"], fit["d"]
+            lo = max(k * d * 100 * 1.001, 0.0)
+            DD = np.linspace(lo, D.max() * 1.05, 200)
+            WW = C * rho_b * np.sqrt(G) * np.clip(DD / 100 - k * d, 0, None) ** 1.5
+            ax_w.plot(DD, WW * 1e3, "-", color=c, lw=0.9)
+    ax_w.set_xlabel("D (cm)")
+    ax_w.set_ylabel("mass flow rate W (g/s)")
+    ax_w.set_xlim(left=0)
+    ax_w.set_ylim(bottom=0)
+    ax_e.set_xlabel("D (cm)")
+    ax_e.set_ylabel("empty time (s)")
+    ax_e.set_ylim(bottom=0)
+    handles.append(plt.Line2D([], [], color="0.3", lw=0.9))
+    labels.append("Beverloo fit")
+    shared_legend(fig, handles, labels, width)
+    return fig
+
+
+# ----- k versus theta --------------------------------------------------------------------------
+
+def plot_k_theta(st, width):
+    """k of each group's Beverloo fit against its wall angle; one series per value of the other
+    varied settings."""
+    w = min(width, WIDTHS["column"])
+    others = [c for c in st.s.group_settings if c != "hopper.theta_rad"]
+    series = {}
+    missing = []
+    for g, rows in st.groups.items():
+        p = st.points.loc[rows[0]]
+        key = ", ".join(setting_text(c, p[c]) for c in others)
+        fit = st.fit_row("beverloo", g) if st.s.has_analysis else None
+        theta = float(p["theta_deg"])
+        if fit is None or _missing(fit.get("k")):
+            missing.append(theta)
+            continue
+        series.setdefault(key, []).append((theta, fit["k"], fit.get("k_err") or 0.0))
+    n_legend = len(series) if len(series) > 1 else 0
+    fig, (ax,) = layout(st, 1, w, panel_h=2.3, legend_rows=legend_rows(list(series) if n_legend else [], w))
+    handles, labels = [], []
+    for n, (key, pts) in enumerate(series.items()):
+        pts.sort()
+        th, k, ke = map(np.array, zip(*pts))
+        h = ax.errorbar(th, k, yerr=ke, fmt="osD^v"[n % 5] + "-", color="C%d" % n, capsize=2,
+                        ms=3, lw=0.8)
+        handles.append(h)
+        labels.append(key)
+    if missing:
+        ths = sorted(set(missing))
+        ax.text(0.5, 0.04 if series else 0.5,
+                "no fit at %s = %s\u00b0 (< 3 outlets)" % ("\u03b8", ", ".join("%g" % t for t in ths))
+                if len(ths) <= 4 else "no fit for %d angles (< 3 outlets)" % len(ths),
+                transform=ax.transAxes, ha="center", va="bottom" if series else "center",
+                fontsize=7, color="0.35")
+    ax.set_xlabel(r"wall angle $\theta$ (deg)")
+    ax.set_ylabel("Beverloo k")
+    if n_legend:
+        shared_legend(fig, handles, labels, w)
+    return fig
+
+
+# ----- particles in the hopper and jam onsets --------------------------------------------------
+
+def plot_in_hopper(st, width):
+    fig, axes = layout(st, len(st.groups), width, panel_h=1.9,
+                       legend_rows=legend_rows([D_text(d) for d in st.Ds], width))
+    curves = st.s.curves
+    used = set()
+    for ax, (g, rows) in zip(axes, st.groups.items()):
+        for i in rows:
+            d = float(st.points.at[i, "D_cm"])
+            cu = curves[curves["point"] == i]
+            for _, one in cu.groupby("row"):
+                ax.plot(one["time"], one["in_hopper"], color=st.D_colour[d], lw=0.7, alpha=0.8)
+                used.add(d)
+        ax.set_xlabel("t (s of discharge)")
+        ax.set_ylabel("particles in hopper")
+        ax.set_xlim(left=0)
+        ax.set_ylim(bottom=0)
+        if g:
+            ax.set_title(g)
+    shared_legend(fig, *D_legend(st, [d for d in st.Ds if d in used]), width)
+    return fig
+
+
+def plot_jam_onsets(st, width):
+    fig, axes = layout(st, len(st.groups), width, panel_h=1.9,
+                       legend_rows=legend_rows([D_text(d) for d in st.Ds], width))
+    jams, ev = st.s.jams, st.s.events
+    real = st.s.realizations
+    ends = ev.groupby("row")["time"].max() if len(ev) else {}
+    used = set()
+    for ax, (g, rows) in zip(axes, st.groups.items()):
+        for y, i in enumerate(rows):
+            d = float(st.points.at[i, "D_cm"])
+            rs = list(real.index[(real["point"] == i) & (real["status"] != "failed")])
+            for j, row in enumerate(rs):
+                yy = y + (j + 0.5) / max(1, len(rs)) * 0.8 - 0.4
+                end = float(ends.get(row, 0.0)) if len(ev) else 0.0
+                ax.plot([0, end], [yy, yy], color="0.85", lw=0.6, zorder=1)
+                on = jams.loc[jams["row"] == row, "onset"]
+                ax.plot(on, np.full(len(on), yy), "|", color=st.D_colour[d], ms=4, mew=1.0,
+                        zorder=2)
+                used.add(d)
+        ax.set_yticks(range(len(rows)))
+        ax.set_yticklabels(["%g" % float(st.points.at[i, "D_cm"]) for i in rows])
+        ax.set_ylim(-0.6, len(rows) - 0.4)
+        ax.set_ylabel("D (cm)")
+        ax.set_xlabel("jam onset (s of discharge)")
+        ax.set_xlim(left=0)
+        if g:
+            ax.set_title(g)
+    shared_legend(fig, *D_legend(st, [d for d in st.Ds if d in used]), width)
+    return fig
+
+
+# ----- coarse-grained fields -------------------------------------------------------------------
+
+# name, symbol, colour map of the mean, its scale: "centred" (diverging, symmetric about 0),
+# "log" (the outlet jet is ~10x faster than the bulk) or "linear" (from 0).
 FIELDS = [("vx", r"$v_x$", "RdBu_r", "centred"), ("vy", r"$v_y$", "RdBu_r", "centred"),
-          ("speed", r"$|v|$", "viridis", "log"), ("pressure", "pressure", "magma", "linear")]
+          ("speed", r"$|v|$", "viridis", "log"), ("pressure", "p", "magma", "linear")]
 FIELD_NAMES = [f[0] for f in FIELDS]
 STD_CMAP = "plasma"
-
-
-def scene_value(scene, key):
-    for line in scene.splitlines():
-        if line.startswith(key + "="):
-            try:
-                return float(line[len(key) + 1:])
-            except ValueError:
-                return None
-    return None
+UNIT_TEXT = {"m/s": "m/s", "1": "mg"}
 
 
 class PointFields:
-    """One point's merged fields from /analysis/fields/<label> (lengths in cm)."""
+    """One point's merged fields (an xarray Dataset of hopper_store), lengths in cm."""
 
-    def __init__(self, g, scene):
-        self.label = g.attrs["label"]
-        self.kernel = g.attrs["kernel"]
-        self.cell = float(g.attrs["cell"]) * 100
-        self.kernel_width = float(g.attrs["kernel_width"]) * 100
-        self.x0, self.y0 = float(g.attrs["x0"]) * 100, float(g.attrs["y0"]) * 100
-        self.nx, self.ny = int(g.attrs["nx"]), int(g.attrs["ny"])
-        self.realizations = int(g.attrs["realizations"])
-        self.total_windows = int(g.attrs["total_windows"])
-        self.wall = float(g.attrs["wall_diameter"]) * 100
-        self.window = scene_value(scene, "fields.window_s")
-        self.xe = self.x0 + self.cell * np.arange(self.nx + 1)  # cell edges
-        self.ye = self.y0 + self.cell * np.arange(self.ny + 1)
-        windows = g["windows"][:]
-        self.empty = windows == 0  # cells without data hold 0: masked (drawn white)
-        self.ox, self.oy = g["outline_x"][:] * 100, g["outline_y"][:] * 100
-        # Cells whose centre lies beyond the wall particles' centre line (above the outlet) are
-        # outside the container: a kernel wider than a cell reaches them from inside; mask them.
-        if len(self.ox) >= 2:
+    def __init__(self, label, ds):
+        self.label = label
+        a = ds.attrs
+        self.kernel = str(a.get("kernel", "cell"))
+        self.cell = float(a["cell"]) * 100
+        self.kernel_width = float(a.get("kernel_width", 0.0)) * 100
+        x0, y0 = float(a["x0"]) * 100, float(a["y0"]) * 100
+        nx, ny = ds.sizes["x"], ds.sizes["y"]
+        self.realizations = int(a.get("realizations", 0))
+        self.xe = x0 + self.cell * np.arange(nx + 1)
+        self.ye = y0 + self.cell * np.arange(ny + 1)
+        self.wall = float(a.get("wall_diameter", 0.0)) * 100
+        self.ox, self.oy = ds["outline_x"].values * 100, ds["outline_y"].values * 100
+        empty = ds["windows"].values == 0
+        if len(self.ox) >= 2:  # cells beyond the walls (a wide kernel reaches them): masked
             xc = 0.5 * (self.xe[:-1] + self.xe[1:])
             yc = 0.5 * (self.ye[:-1] + self.ye[1:])
             wall_x = np.interp(yc, self.oy, self.ox)
-            outside = (yc[:, None] > 0) & (np.abs(xc)[None, :] > wall_x[:, None])
-            self.empty = self.empty | outside
-        self.maps = {}
+            empty = empty | ((yc[:, None] > 0) & (np.abs(xc)[None, :] > wall_x[:, None]))
+        self.maps, self.units = {}, {}
         for name in FIELD_NAMES:
             for stat in ("mean", "std"):
-                self.maps[stat, name] = np.ma.masked_where(self.empty, g["%s_%s" % (stat, name)][:])
-        self.units = {name: g["mean_" + name].attrs["units"] for name in FIELD_NAMES}
-        # The view: the grid's width and the walls (centre line +- half a wall particle); from the
-        # bottom of the grid to two cells above the highest cell with data (the walls above the
-        # fill show nothing).
+                v = ds["%s_%s" % (stat, name)].values
+                self.maps[stat, name] = np.ma.masked_where(empty | ~np.isfinite(v), v)
+            self.units[name] = str(ds["mean_" + name].attrs.get("units", ""))
         reach = float(np.max(np.abs(self.ox))) + 0.5 * self.wall if len(self.ox) else 0.0
         half = max(abs(self.xe[0]), abs(self.xe[-1]), reach)
-        rows = np.nonzero((~self.empty).any(axis=1))[0]
+        rows = np.nonzero((~empty).any(axis=1))[0]
         top = self.ye[rows[-1] + 1] + 2 * self.cell if len(rows) else self.ye[-1]
         self.xlim = (-half, half)
         self.ylim = (self.ye[0], min(top, max(self.ye[-1], float(np.max(self.oy, initial=0)))))
@@ -342,30 +457,11 @@ class PointFields:
 
     def kernel_text(self):
         if self.kernel == "gaussian":
-            return "Gaussian kernel, width %.3g cm" % self.kernel_width
+            return "Gaussian kernel, w = %.2g cm" % self.kernel_width
         return "cell kernel"
 
 
-def read_fields(st):
-    """The points with fields, in /points order ([] when the analysis has none)."""
-    if "fields" not in st.a:
-        if "fields" in st.f:
-            print("plots.py: the store has fields but /analysis has none: run `campaign analyze`",
-                  file=sys.stderr)
-        return []
-    g = st.a["fields"]
-    scenes = dict(zip(st.f["points/label"].asstr()[:], st.f["points/scene"].asstr()[:]))
-    return [PointFields(g[label.replace("/", "_")], scenes.get(label, ""))
-            for label in g["labels"].asstr()[:] if label.replace("/", "_") in g]
-
-
-def colour_label(symbol, unit, stat):
-    text = "%s (%s)" % (symbol, unit)
-    return "std " + text if stat == "std" else text
-
-
 def norm_for(values, scale, stat):
-    """Colour limits from the unmasked values."""
     data = np.ma.compressed(values)
     data = data[np.isfinite(data)]
     top = float(np.max(np.abs(data))) if data.size else 1.0
@@ -388,15 +484,15 @@ def draw_map(ax, pf, values, norm, cmap):
     ax.set_aspect("equal")
     ax.set_xlim(*pf.xlim)
     ax.set_ylim(*pf.ylim)
-    ax.set_facecolor("white")
-    ax.tick_params(labelsize=7)
+    for side in ("top", "right"):
+        ax.spines[side].set_visible(True)
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
+    ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
     return mesh
 
 
 def draw_walls(fig, axes_and_points):
-    """Both walls (the outline and its mirror) as lines as thick as the wall particles.
-
-    Call once the layout is final: the line width in points comes from the axes' scale."""
+    """Both walls as lines as thick as the wall particles (once the layout is final)."""
     fig.canvas.draw()
     for ax, pf in axes_and_points:
         if len(pf.ox) == 0:
@@ -405,22 +501,22 @@ def draw_walls(fig, axes_and_points):
         x1, _ = ax.transData.transform((1.0, 0.0))
         lw = max(0.5, abs(x1 - x0) * pf.wall * 72.0 / fig.dpi)
         for sign in (1.0, -1.0):
-            ax.plot(sign * pf.ox, pf.oy, color="0.55", lw=lw, solid_capstyle="round",
-                    solid_joinstyle="round", zorder=3)
+            ax.plot(sign * pf.ox, pf.oy, color="0.55", lw=lw, solid_capstyle="round", zorder=3)
 
 
 def colour_bar(fig, mesh, ax, label):
-    cb = fig.colorbar(mesh, ax=ax, fraction=0.08, pad=0.02, shrink=0.95)
+    cb = fig.colorbar(mesh, ax=ax, fraction=0.08, pad=0.03, shrink=0.9)
     norm = mesh.norm
     if isinstance(norm, matplotlib.colors.LogNorm):
-        # plain numbers at 1-2-5 steps (a range under a decade would show one power of ten)
         ticks = [k * 10.0 ** e for e in range(-6, 4) for k in (1, 2, 5)]
         ticks = [t for t in ticks if norm.vmin <= t <= norm.vmax]
         cb.ax.minorticks_off()
         cb.set_ticks(ticks)
         cb.set_ticklabels(["%g" % t for t in ticks])
-    cb.set_label(label, fontsize=8)
-    cb.ax.tick_params(labelsize=7)
+    else:
+        cb.ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
+    cb.set_label(label, fontsize=7)
+    cb.ax.tick_params(labelsize=6.5)
     return cb
 
 
@@ -428,67 +524,54 @@ def file_part(label):
     return "".join(c if c.isalnum() or c in "._=-" else "_" for c in label)
 
 
-def windows_text(pf):
-    return "%d windows of %g s" % (pf.total_windows, pf.window) if pf.window else \
-        "%d windows" % pf.total_windows
+def point_title(st, label):
+    i = int(np.nonzero(st.points["label"].to_numpy() == label)[0][0])
+    parts = [setting_text(c, st.points.at[i, c]) for c in st.s.varied]
+    return ", ".join(parts)
 
 
-def plot_fields(st, out):
-    """One figure per point with fields: for vx, vy, speed and pressure the mean map (top row)
-    and the fluctuation map (bottom row: standard deviation over windows), the hopper's walls
-    drawn, cells without data white. Returns the paths written ([] when there are no fields)."""
-    written = []
-    for pf in read_fields(st):
-        map_w = 2.2  # inches per map; each column also holds its colour bar
-        fig, axes = plt.subplots(2, 4, figsize=(4 * (map_w + 1.05),
-                                                2 * (map_w * pf.aspect() + 0.55) + 0.45),
-                                 squeeze=False, layout="constrained")
-        placed = []
-        for col, (name, symbol, cmap, scale) in enumerate(FIELDS):
-            for row, stat in enumerate(("mean", "std")):
-                ax = axes[row][col]
-                values = pf.maps[stat, name]
-                mesh = draw_map(ax, pf, values, norm_for(values, scale, stat),
-                                cmap if stat == "mean" else STD_CMAP)
-                colour_bar(fig, mesh, ax, colour_label(symbol, pf.units[name], stat))
-                ax.set_title(("mean " if stat == "mean" else "fluctuation ") + symbol, fontsize=9)
-                if row == 1:
-                    ax.set_xlabel("x (cm)", fontsize=8)
-                if col == 0:
-                    ax.set_ylabel("y (cm)", fontsize=8)
-                placed.append((ax, pf))
-        fig.suptitle("%s: %d realizations, %s, %s, cells of %.3g cm; white: no data"
-                     % (pf.label, pf.realizations, windows_text(pf), pf.kernel_text(), pf.cell),
-                     fontsize=10)
-        draw_walls(fig, placed)
-        path = os.path.join(out, "fields_%s.png" % file_part(pf.label))
-        fig.savefig(path, dpi=130)
-        plt.close(fig)
-        written.append(path)
-    return written
+def plot_field_point(st, pf, width):
+    cols = 4 if width > 5 else 2
+    rows = 2 * (4 // cols)
+    map_w = width / cols - 0.75
+    fig, axes = plt.subplots(rows, cols, figsize=(width, rows * (map_w * pf.aspect() + 0.45)
+                                                  + 0.35), squeeze=False, layout="constrained")
+    placed = []
+    for k, (name, symbol, cmap, scale) in enumerate(FIELDS):
+        for s, stat in enumerate(("mean", "std")):
+            r = 2 * (k // cols) + s
+            ax = axes[r][k % cols]
+            values = pf.maps[stat, name]
+            mesh = draw_map(ax, pf, values, norm_for(values, scale, stat),
+                            cmap if stat == "mean" else STD_CMAP)
+            unit = UNIT_TEXT.get(pf.units[name], pf.units[name])
+            colour_bar(fig, mesh, ax, "%s%s (%s)" % ("" if stat == "mean" else "\u03c3 ", symbol,
+                                                    unit))
+            ax.tick_params(labelsize=6.5)
+            ax.set_xlabel("x (cm)", fontsize=7)
+            ax.set_ylabel("y (cm)", fontsize=7)
+            placed.append((ax, pf))
+    fig.suptitle("%s; %d realizations, %s" % (point_title(st, pf.label) or pf.label,
+                                              pf.realizations, pf.kernel_text()))
+    draw_walls(fig, placed)
+    return fig
 
 
-def plot_fields_comparison(st, labels, field, path):
-    """Two points side by side (e.g. the cell and the Gaussian kernel of one D and theta): one
-    field's mean (top row) and fluctuation (bottom row), each row on one colour scale."""
-    by_label = {pf.label: pf for pf in read_fields(st)}
-    missing = [lab for lab in labels if lab not in by_label]
+def plot_fields_comparison(st, fields, labels, field, width):
+    missing = [lab for lab in labels if lab not in fields]
     if missing:
-        fail("no fields for point(s) %s in /analysis/fields (points with fields: %s)" % (
-            ", ".join(repr(m) for m in missing), ", ".join(repr(k) for k in by_label) or "none"))
+        fail("no fields for point(s) %s (points with fields: %s)" % (
+            ", ".join(repr(m) for m in missing), ", ".join(repr(k) for k in fields) or "none"))
     name, symbol, cmap, scale = FIELDS[FIELD_NAMES.index(field)]
-    pfs = [by_label[lab] for lab in labels]
-    # one view for both (the union of their extents)
+    pfs = [PointFields(lab, fields[lab]) for lab in labels]
     xlim = (min(pf.xlim[0] for pf in pfs), max(pf.xlim[1] for pf in pfs))
     ylim = (min(pf.ylim[0] for pf in pfs), max(pf.ylim[1] for pf in pfs))
     for pf in pfs:
         pf.xlim, pf.ylim = xlim, ylim
-    # the settings both labels share go into the title, the others above each column
-    settings = [lab.split() for lab in labels]
-    common = [x for x in settings[0] if x in settings[1]]
-    map_w = 2.8
-    fig, axes = plt.subplots(2, 2, figsize=(2 * map_w + 1.5, 2 * (map_w * pfs[0].aspect() + 0.5)
-                                            + 0.5), squeeze=False, layout="constrained")
+    w = min(width, 5.0)
+    map_w = w / 2 - 0.8
+    fig, axes = plt.subplots(2, 2, figsize=(w, 2 * (map_w * pfs[0].aspect() + 0.45) + 0.4),
+                             squeeze=False, layout="constrained")
     placed = []
     for row, stat in enumerate(("mean", "std")):
         both = np.ma.concatenate([pf.maps[stat, name].ravel() for pf in pfs])
@@ -496,53 +579,84 @@ def plot_fields_comparison(st, labels, field, path):
         for col, pf in enumerate(pfs):
             ax = axes[row][col]
             mesh = draw_map(ax, pf, pf.maps[stat, name], norm, cmap if stat == "mean" else STD_CMAP)
-            own = " ".join(x for x in settings[col]
-                           if x not in common and not x.startswith("fields.kernel="))
             if row == 0:
-                ax.set_title("%s\n(%s)" % (pf.kernel_text(), own) if own else pf.kernel_text(),
-                             fontsize=9)
-            if row == 1:
-                ax.set_xlabel("x (cm)", fontsize=8)
-            ax.set_ylabel("y (cm)" if col == 0 else "", fontsize=8)
+                ax.set_title(pf.kernel_text() if pfs[0].kernel != pfs[1].kernel
+                             else point_title(st, pf.label))
+            ax.set_xlabel("x (cm)", fontsize=7)
+            ax.set_ylabel("y (cm)" if col == 0 else "", fontsize=7)
+            ax.tick_params(labelsize=6.5)
             placed.append((ax, pf))
-        colour_bar(fig, mesh, list(axes[row]),
-                   ("mean " if stat == "mean" else "fluctuation, ")
-                   + colour_label(symbol, pfs[0].units[name], stat))
-    fig.suptitle("%s\n%d + %d realizations (%s + %s); white: no data" % (
-        " ".join(common), pfs[0].realizations, pfs[1].realizations, windows_text(pfs[0]),
-        windows_text(pfs[1])), fontsize=9)
+        unit = UNIT_TEXT.get(pfs[0].units[name], pfs[0].units[name])
+        colour_bar(fig, mesh, list(axes[row]), "%s%s (%s)" % (
+            "" if stat == "mean" else "\u03c3 ", symbol, unit))
     draw_walls(fig, placed)
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path
+    return fig
+
+
+# ----- all figures -----------------------------------------------------------------------------
+
+FIGURES = [("survival", plot_survival), ("jam_rate", plot_jam_rate),
+           ("beverloo", plot_beverloo), ("k_theta", plot_k_theta),
+           ("in_hopper", plot_in_hopper), ("jam_onsets", plot_jam_onsets)]
+
+
+def figures(store, width=WIDTHS["page"]):
+    """Every figure of a store as (name, matplotlib Figure), drawn but not saved (the tests check
+    their text layout)."""
+    with plt.rc_context(STYLE):
+        st = Study(store)
+        for name, draw in FIGURES:
+            yield name, draw(st, width)
+        fields = store.fields()
+        for label, ds in fields.items():
+            yield "fields_" + file_part(label), plot_field_point(st, PointFields(label, ds), width)
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Figures of a campaign store (after analyze).")
     ap.add_argument("store", help="the store (STORE.h5)")
-    ap.add_argument("--out", required=True, help="directory for the PNG files")
+    ap.add_argument("--out", required=True, help="directory for the figures")
+    ap.add_argument("--format", default="png",
+                    help="comma-separated: png, pdf, svg (default png)")
+    ap.add_argument("--width", default="page", choices=sorted(WIDTHS),
+                    help="page (7 in, default) or column (3.4 in)")
     ap.add_argument("--compare", nargs=2, metavar="LABEL",
-                    help="also draw one field of two points side by side (e.g. the cell and the "
-                         "Gaussian kernel of one D and theta) into OUT/fields_compare.png")
+                    help="also draw one field of two points side by side into "
+                         "OUT/fields_compare.FORMAT")
     ap.add_argument("--field", default="speed", choices=FIELD_NAMES,
                     help="the field --compare draws (default speed)")
     ap.add_argument("--compare-out", metavar="PATH",
                     help="where --compare writes its figure (default OUT/fields_compare.png)")
     args = ap.parse_args(argv)
+    formats = args.format.split(",")
+    bad = [f for f in formats if f not in FORMATS]
+    if bad:
+        fail("unknown format '%s' (allowed: %s)" % (bad[0], ", ".join(FORMATS)))
     if not os.path.exists(args.store):
         fail("no store at '%s'" % args.store)
     try:
-        st = Store(args.store)
-    except OSError as e:
-        fail("cannot read '%s': %s" % (args.store, e))
+        store = open_store(args.store)
+    except (OSError, ValueError) as e:
+        fail(str(e), 1)
+    if not store.has_analysis:
+        fail("'%s' has no /analysis group: run `campaign analyze %s` first"
+             % (args.store, args.store))
     os.makedirs(args.out, exist_ok=True)
-    written = [plot_survival(st, args.out), plot_jam_onsets(st, args.out),
-               plot_beverloo(st, args.out), plot_in_hopper(st, args.out)]
-    written += plot_fields(st, args.out)
+    width = WIDTHS[args.width]
+    written = []
+    for name, fig in figures(store, width):
+        written += save(fig, args.out, name, formats)
     if args.compare:
-        written.append(plot_fields_comparison(
-            st, args.compare, args.field,
-            args.compare_out or os.path.join(args.out, "fields_compare.png")))
+        with plt.rc_context(STYLE):
+            fig = plot_fields_comparison(Study(store), store.fields(), args.compare, args.field,
+                                         width)
+            if args.compare_out:
+                fig.savefig(args.compare_out)
+                plt.close(fig)
+                written.append(args.compare_out)
+            else:
+                written += save(fig, args.out, "fields_compare", formats)
+    store.close()
     for p in written:
         print(p)
     return 0

@@ -33,6 +33,29 @@ std::string progress_line(int done, int total, int running, int failed, double r
     return buf;
 }
 
+CostEta::CostEta(int workers, double prior_seconds_per_cost)
+    : workers_(std::max(1, workers)), prior_(prior_seconds_per_cost) {}
+
+void CostEta::add_pending(double cost, int tasks) {
+    pending_cost_ += cost * tasks;
+}
+
+void CostEta::finished(double cost, double worker_seconds, int tasks, bool was_pending) {
+    if (was_pending) pending_cost_ = std::max(0.0, pending_cost_ - cost * tasks);
+    if (cost > 0 && worker_seconds > 0) {
+        cost_done_ += cost * tasks;
+        seconds_done_ += worker_seconds;
+    }
+}
+
+double CostEta::seconds_per_cost() const {
+    return cost_done_ > 0 ? seconds_done_ / cost_done_ : prior_;
+}
+
+double CostEta::seconds_left() const {
+    return pending_cost_ * seconds_per_cost() / workers_;
+}
+
 void write_summary(std::ostream& out, const store::StoreStatus& status,
                    const std::vector<std::string>& labels) {
     std::map<std::string, const store::PointStatus*> by_label;
@@ -43,7 +66,7 @@ void write_summary(std::ostream& out, const store::StoreStatus& status,
         width = std::max(width, l.size());
     char buf[512];
     std::snprintf(buf, sizeof buf, "%-*s  %13s  %6s  %6s  %14s  %14s\n", static_cast<int>(width),
-                  "point", "realizations", "failed", "jams", "mean surv. (s)", "mean empty (s)");
+                  "point", "realizations", "failed", "jams", "tau (s)", "mean empty (s)");
     out << buf;
     for (const auto& l : labels) {
         const auto it = by_label.find(l);
@@ -60,6 +83,7 @@ void write_summary(std::ostream& out, const store::StoreStatus& status,
                       empty);
         out << buf;
     }
+    out << "(tau: mean survival time, the censored maximum-likelihood mean = flow time / jams)\n";
 }
 
 }  // namespace hopper::campaign

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "hopper/campaign/inproc_channel.hpp"
+#include "hopper/campaign/mixing.hpp"
 #include "hopper/campaign/mpi.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
@@ -117,6 +118,18 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     if (resumed) {
         for (const auto& n : check_compatible(st.plan(), plan))
             err << "campaign: note: " << n << '\n';
+        if (const auto mixed = mixed_settings(st.plan(), plan); !mixed.empty()) {
+            if (!opt.allow_mixed)
+                throw core::ConfigError(
+                    "the sweep adds points whose settings, not varied by the sweep, differ "
+                    "from points already in the store:" +
+                    describe(mixed) +
+                    "\n  Fits would pool different physics. Use another --store, vary the "
+                    "setting in the sweep so that labels tell the points apart, or pass "
+                    "--allow-mixed (the Python figures then group by every differing setting).");
+            err << "campaign: note: --allow-mixed: new points differ from stored ones in"
+                << describe(mixed) << '\n';
+        }
         const auto status = st.status();
         if (!status.runs.empty() && status.runs.back().info.code_version != opt.code_version)
             err << "campaign: note: the store's last run used code version "
@@ -256,6 +269,10 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
                                     opt.sweep.string() + "' (is it on a shared file system?)");
         }
         std::vector<std::string> hosts = mpi->hosts();
+        if (rank == 0 && opt.threads_given)
+            err << "campaign: note: --threads " << opt.threads << " is ignored under mpirun: the "
+                << size - 1 << " worker(s) are ranks 1.." << size - 1
+                << " (start more ranks for more workers)" << std::endl;
         if (rank != 0) {
             SignalWatcher ignore;  // the master decides; a forwarded signal must not kill us
             auto ch = mpi->worker_channel();

@@ -857,6 +857,12 @@ std::string num(const std::optional<double>& v, const char* f = "%.4g") {
     return v ? fmt(f, *v) : std::string("-");
 }
 
+// A p-value with the digits that matter: 0.28, 0.046, 0.004, <0.001 (never "0.00").
+std::string p_text(double p) {
+    if (p < 0.001) return "<0.001";
+    return fmt(p < 0.1 ? "%.2g" : "%.2f", p);
+}
+
 }  // namespace
 
 void write_analysis(std::ostream& out, const Analysis& a) {
@@ -864,11 +870,13 @@ void write_analysis(std::ostream& out, const Analysis& a) {
     for (const auto& p : a.points)
         width = std::max(width, p.label.size());
     char buf[1024];
-    out << "analysis per point (c/f/a/t = complete/failed/arrested/time_limit; tau: censored "
-           "MLE, 95 % CI; p: exponential GoF; early/late: p of equal jam rates)\n";
+    out << "analysis per point (c/f/a/t = complete/failed/arrested/time_limit; avg: plain "
+           "average of the survival intervals, biased low by censoring; tau: mean survival time, "
+           "censored MLE = flow time / jams, 95 % CI; gof p: exponential law; flow: particles "
+           "per second; early/late: p of equal jam rates)\n";
     std::snprintf(buf, sizeof buf, "%-*s  %9s  %5s  %6s  %9s  %22s  %6s  %6s  %16s  %18s  %10s\n",
-                  static_cast<int>(width), "point", "c/f/a/t", "jams", "shakes", "mean (s)",
-                  "tau (s) [95% CI]", "gof p", "R2", "empty (s) +- sd", "rate (1/s) +- se",
+                  static_cast<int>(width), "point", "c/f/a/t", "jams", "shakes", "avg (s)",
+                  "tau (s) [95% CI]", "gof p", "R2", "empty (s) +- sd", "flow (1/s) +- se",
                   "early/late");
     out << buf;
     for (const auto& p : a.points) {
@@ -888,9 +896,9 @@ void write_analysis(std::ostream& out, const Analysis& a) {
             buf, sizeof buf, "%-*s  %9s  %5d  %6d  %9s  %22s  %6s  %6s  %16s  %18s  %10s\n",
             static_cast<int>(width), p.label.c_str(), cfat.c_str(), p.n_jams, p.n_shakes,
             num(p.fit ? p.fit->mean_all : std::nullopt).c_str(), tau.c_str(),
-            p.gof.valid ? fmt("%.3f", p.gof.p_value).c_str() : "-",
+            p.gof.valid ? p_text(p.gof.p_value).c_str() : "-",
             p.line.valid ? fmt("%.3f", p.line.r2).c_str() : "-", empty.c_str(), rate.c_str(),
-            p.early_late.valid ? fmt("%.3f", p.early_late.p_value).c_str() : "-");
+            p.early_late.valid ? p_text(p.early_late.p_value).c_str() : "-");
         out << buf;
     }
     out << "Beverloo W = C rho_b sqrt(g) (D - k d)^(3/2) per wall angle\n  rho_b: "
@@ -1033,25 +1041,35 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
     return code;
 }
 
+namespace {
+
+po::options_description analyze_options() {
+    po::options_description d("analyze options");
+    d.add_options()("json", po::bool_switch(), "print one JSON object instead of the tables")  //
+        ("no-write", po::bool_switch(), "do not write /analysis into the store")               //
+        ("help,h", "show this help");
+    return d;
+}
+
+}  // namespace
+
 void print_analyze_help(std::ostream& os) {
     os << "usage: campaign analyze STORE.h5 [--json] [--no-write]\n\n"
-          "Statistics of every point of a store (survival times: algebraic mean and censored\n"
-          "exponential MLE tau with its 95 % interval, goodness of fit, early/late jam rates;\n"
-          "empty times; discharge rates) and across points (Beverloo fit per wall angle, jam\n"
-          "rate 1/tau versus D), printed as tables or one JSON object, and written into the\n"
-          "store's /analysis group (replacing the previous one). Reads the journal; refuses to\n"
-          "write while a `campaign run` holds the store. Plots: analysis/plots.py STORE --out "
-          "DIR\n\n"
-          "  --json       print one JSON object instead of the tables\n"
-          "  --no-write   do not write /analysis into the store\n";
+          "Statistics of every point of a store (survival times: their plain average and the\n"
+          "mean survival time tau, the censored exponential MLE, with its 95 % interval;\n"
+          "goodness of fit; early/late jam rates; empty times; flow rates in particles per\n"
+          "second and kg/s) and across points (Beverloo fit per group, jam rate 1/tau versus\n"
+          "D), printed as tables or one JSON object, and written into the store's /analysis\n"
+          "group (replacing the previous one). Reads the journal; refuses to write while a\n"
+          "`campaign run` holds the store. Figures: campaign plot STORE.h5\n\n"
+          "exit codes: 0 analyzed (and written), 1 no store, or /analysis could not be written\n"
+          "            (a run holds the store, or the HDF5 file is not in step; the tables are\n"
+          "            printed anyway), 2 bad command line\n\n"
+       << analyze_options();
 }
 
 int analyze_command(const std::vector<std::string>& args) {
-    po::options_description d("analyze options");
-    d.add_options()("json", po::bool_switch(), "print one JSON object")  //
-        ("no-write", po::bool_switch(), "do not write /analysis")        //
-        ("help,h", "show this help");
-    const po::variables_map vm = parse_command(args, d, "store");
+    const po::variables_map vm = parse_command(args, analyze_options(), "store");
     if (vm.count("help")) {
         print_analyze_help(std::cout);
         return 0;

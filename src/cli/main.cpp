@@ -14,6 +14,7 @@
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
 #include "cli/parse.hpp"
+#include "cli/python_tools.hpp"
 #include "cli/run.hpp"
 #include "cli/simulate.hpp"
 #include "cli/status.hpp"
@@ -36,15 +37,27 @@ using hopper::cli::single_positional;
 struct Command {
     std::string_view name;
     std::string_view summary;
+    void (*help)(std::ostream&);  // `campaign help <name>`
 };
+
+void print_simulate_help(std::ostream& os);
 
 // The commands this build has.
 constexpr Command commands[] = {
-    {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)"},
-    {"status", "progress and failures of a store (works while a run writes it)"},
-    {"analyze", "statistics and fits of a store, written into its /analysis group"},
-    {"simulate", "run one realization of one scene of a sweep file (no MPI)"},
-    {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself"},
+    {"run", "run or resume the campaign of a sweep file (mpirun for many ranks)",
+     hopper::cli::print_run_help},
+    {"status", "progress, rate, ETA and failures of a store (works while a run writes it)",
+     hopper::cli::print_status_help},
+    {"analyze", "statistics and fits of a store, written into its /analysis group",
+     hopper::cli::print_analyze_help},
+    {"plot", "figures of a store (survival, jam rate, Beverloo, fields; png, pdf, svg)",
+     hopper::cli::print_plot_help},
+    {"export", "a store's tables as CSV files and its field maps for ParaView",
+     hopper::cli::print_export_help},
+    {"simulate", "run one realization: of a sweep file's scene, or a stored one again",
+     print_simulate_help},
+    {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself",
+     hopper::cli::print_submit_help},
 };
 
 std::string available_commands() {
@@ -68,16 +81,25 @@ po::options_description simulate_options() {
     po::options_description d("simulate options");
     // Numbers are read as text and checked by cli/options.hpp, so that "-1", "1.5", "nan" get a
     // clear message (Boost's lexical casts would wrap "-1" into a huge unsigned seed).
-    d.add_options()                                                                           //
-        ("D", po::value<std::string>()->value_name("CM"), "outlet width D in cm (required)")  //
+    d.add_options()                                                                //
+        ("D", po::value<std::string>()->value_name("CM"), "outlet width D in cm")  //
         ("theta", po::value<std::string>()->value_name("DEG"),
-         "wall angle to the horizontal in degrees (required)")  //
+         "wall angle to the horizontal in degrees")  //
         ("seed", po::value<std::string>()->value_name("N"),
-         "random seed, a non-negative integer (required)")                           //
+         "random seed, a non-negative integer")  //
+        ("store", po::value<std::string>()->value_name("STORE.h5"),
+         "with --point: the store holding the realization")  //
+        ("point", po::value<std::string>()->value_name("LABEL"),
+         "re-run a stored realization of this point (its label, as `campaign status` lists it)")  //
+        ("realization", po::value<std::string>()->value_name("I"),
+         "with --point: the realization's index (0-based)")                          //
         ("json", po::bool_switch(), "print one JSON object instead of the summary")  //
         ("snapshots", po::value<std::string>()->value_name("DIR"),
-         "write LAMMPS-style dump files DIR/hopper.NNNNNN.dump (OVITO, ParaView); existing "
-         "hopper.*.dump files in DIR are replaced")  //
+         "write particle snapshots into DIR: VTK files hopper.NNNNNN.vtu with the series "
+         "hopper.pvd (open hopper.pvd in ParaView) and LAMMPS dump files hopper.NNNNNN.dump "
+         "(OVITO); earlier frames in DIR are removed")  //
+        ("snapshot-format", po::value<std::string>()->value_name("LIST"),
+         "vtu, dump or vtu,dump (default vtu,dump)")  //
         ("snapshot-interval", po::value<std::string>()->value_name("S"),
          "seconds of simulated time between snapshots (default 0.05)")                            //
         ("progress", po::bool_switch(), "progress line on stderr every 0.5 s of simulated time")  //
@@ -86,10 +108,19 @@ po::options_description simulate_options() {
 }
 
 void print_simulate_help(std::ostream& os) {
-    os << "usage: campaign simulate SWEEP.toml --D CM --theta DEG --seed N [--json]\n"
-          "                         [--snapshots DIR] [--snapshot-interval S] [--progress]\n\n"
+    os << "usage: campaign simulate SWEEP.toml --D CM --theta DEG --seed N [OPTIONS]\n"
+          "       campaign simulate --store STORE.h5 --point LABEL --realization I [OPTIONS]\n"
+          "OPTIONS: [--json] [--snapshots DIR] [--snapshot-interval S]\n"
+          "         [--snapshot-format vtu,dump] [--progress]\n\n"
           "Runs one realization of the sweep file's base scene with outlet D and wall angle\n"
-          "theta, and prints a summary (or, with --json, one JSON object) on stdout.\n\n"
+          "theta, or runs a stored realization again (any point, whatever its settings: the\n"
+          "scene comes from the sweep text the store recorded, checked against the point's\n"
+          "stored physics, and the seed from the store; the outcome is compared with the\n"
+          "stored one), and prints a summary (or, with --json, one JSON object) on stdout.\n"
+          "--progress prints the simulated time, the wall-clock rate and an estimate of the\n"
+          "time left on stderr.\n\n"
+          "exit codes: 0 done, 1 error (or the re-run differs from the stored realization),\n"
+          "            2 bad command line or sweep file, 3 the realization failed\n\n"
        << simulate_options();
 }
 
@@ -108,13 +139,39 @@ int simulate_command(const std::vector<std::string>& args) {
 
     using hopper::cli::parse_finite;
     hopper::cli::SimulateOptions opt;
-    opt.sweep = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
-    opt.D_cm = parse_finite("--D", required(vm, "D"));
-    opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
-    opt.seed = hopper::cli::parse_seed("--seed", required(vm, "seed"));
+    if (vm.count("point")) {
+        for (const char* o : {"D", "theta", "seed", "sweep"})
+            if (vm.count(o))
+                throw hopper::core::ConfigError(
+                    std::string(o == std::string("sweep") ? "a sweep file"
+                                                          : "--" + std::string(o)) +
+                    " cannot be given with --point: the store has the point's scene and seed");
+        opt.store = required(vm, "store");
+        opt.point = vm["point"].as<std::string>();
+        const std::uint64_t r =
+            hopper::cli::parse_seed("--realization", required(vm, "realization"));
+        if (r > 100000000)
+            throw hopper::core::ConfigError("--realization " + std::to_string(r) + " is too large");
+        opt.realization = static_cast<int>(r);
+    } else {
+        for (const char* o : {"store", "realization"})
+            if (vm.count(o))
+                throw hopper::core::ConfigError(std::string("--") + o +
+                                                " needs --point LABEL (a stored realization)");
+        opt.sweep = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
+        opt.D_cm = parse_finite("--D", required(vm, "D"));
+        opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
+        opt.seed = hopper::cli::parse_seed("--seed", required(vm, "seed"));
+    }
     opt.json = vm["json"].as<bool>();
     opt.progress = vm["progress"].as<bool>();
     if (vm.count("snapshots")) opt.snapshot_dir = vm["snapshots"].as<std::string>();
+    if (vm.count("snapshot-format")) {
+        if (!opt.snapshot_dir)
+            throw hopper::core::ConfigError("--snapshot-format needs --snapshots DIR");
+        opt.snapshot_formats =
+            hopper::cli::parse_snapshot_formats(vm["snapshot-format"].as<std::string>());
+    }
     if (vm.count("snapshot-interval")) {
         if (!opt.snapshot_dir)
             throw hopper::core::ConfigError("--snapshot-interval needs --snapshots DIR");
@@ -156,26 +213,11 @@ int main(int argc, char** argv) {
                 print_usage(std::cout);
                 return 0;
             }
-            if (args[1] == "simulate") {
-                print_simulate_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "run") {
-                hopper::cli::print_run_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "status") {
-                hopper::cli::print_status_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "analyze") {
-                hopper::cli::print_analyze_help(std::cout);
-                return 0;
-            }
-            if (args[1] == "submit") {
-                hopper::cli::print_submit_help(std::cout);
-                return 0;
-            }
+            for (const auto& c : commands)
+                if (args[1] == c.name) {
+                    c.help(std::cout);
+                    return 0;
+                }
             return error("no help for unknown command '" + args[1] +
                              "' (available: " + available_commands() + ")",
                          exit_usage);
@@ -191,6 +233,8 @@ int main(int argc, char** argv) {
         if (command == "status") return hopper::cli::status_command(rest);
         if (command == "analyze") return hopper::cli::analyze_command(rest);
         if (command == "submit") return hopper::cli::submit_command(rest);
+        if (command == "plot") return hopper::cli::plot_command(rest);
+        if (command == "export") return hopper::cli::export_command(rest);
         if (command.starts_with("-"))
             return error("unknown option '" + command + "' (try 'campaign --help')", exit_usage);
         return error("unknown command '" + command + "' (available: " + available_commands() + ")",

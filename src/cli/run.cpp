@@ -9,6 +9,7 @@
 
 #include "cli/analyze.hpp"
 #include "cli/options.hpp"
+#include "cli/python_tools.hpp"
 #include "hopper/campaign/run.hpp"
 #include "hopper/core/error.hpp"
 
@@ -35,7 +36,8 @@ po::options_description run_options() {
          "after SIGUSR1/SIGINT, seconds running realizations may take to finish before they "
          "are stopped (default 60)")  //
         ("threads", po::value<std::string>()->value_name("N"),
-         "worker threads when not started by mpirun (default 1)")  //
+         "worker threads when not started by mpirun (default 1; under mpirun the workers are "
+         "the ranks 1..N-1 and this is ignored, with a note)")  //
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
@@ -47,6 +49,11 @@ po::options_description run_options() {
         ("worker-timeout", po::value<std::string>()->value_name("S"),
          "seconds a busy worker may send no heartbeat before its realization is handed to "
          "another worker (default: 5 x the realization's expected duration, at least 300)")  //
+        ("no-plots", po::bool_switch(),
+         "do not draw the figures at the end (campaign plot draws them later)")  //
+        ("allow-mixed", po::bool_switch(),
+         "accept new points whose settings, not varied by the sweep, differ from the store's "
+         "points (refused by default: the fits would pool different physics)")  //
         ("help,h", "show this help");
     return d;
 }
@@ -62,13 +69,16 @@ double non_negative(const char* option, const std::string& text) {
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
           "                    [--threads N] [--flush-interval S] [--worker-timeout S]\n"
-          "                    [--no-file-locking]\n"
+          "                    [--no-file-locking] [--allow-mixed] [--no-plots]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
           "other ranks simulate (use one rank more than cores: the master sleeps while waiting).\n"
           "A store whose physics differs from the sweep file's is refused; more points or\n"
-          "realizations extend it.\n\n"
+          "realizations extend it, unless the new points differ from the stored ones in a\n"
+          "setting the sweep does not vary (refused unless --allow-mixed). At the end it\n"
+          "analyzes the store (campaign analyze) and draws the figures into STORE_plots/\n"
+          "(campaign plot; not with --no-plots or HOPPER_PLOTS=0).\n\n"
           "Signals: SIGUSR1 or SIGINT: no new realizations, running ones may finish within\n"
           "--grace seconds; SIGTERM or a second signal: stop running ones now. Either way what\n"
           "finished is stored and the exit code is 4; the same command resumes.\n\n"
@@ -119,6 +129,7 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         if (n < 1 || n > 4096)
             throw core::ConfigError("--threads must be between 1 and 4096, got '" + t + "'");
         opt.threads = static_cast<int>(n);
+        opt.threads_given = true;
     }
     // Test hook (not for users): HOPPER_STORE_CRASH=<point>:<n> makes the store raise SIGKILL
     // the n-th time it passes <point> (journal, hdf5, rebuild, close); see store.hpp.
@@ -131,6 +142,7 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         opt.store_options.crash_after =
             static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
     }
+    opt.allow_mixed = vm["allow-mixed"].as<bool>();
     // Test hook (not for users): HOPPER_STORE_PAUSE=journal_link:<ms> pauses a run that creates
     // a new store's journal before linking it into place (the race of two runs on a new store).
     if (const char* pause = std::getenv("HOPPER_STORE_PAUSE")) {
@@ -146,7 +158,11 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;
     // At the end of a run that was not stopped: the same analysis as `campaign analyze`.
-    opt.after_run = [](const std::filesystem::path& store, int code) {
+    // Figures at the end unless --no-plots (or HOPPER_PLOTS=0, which the test suite sets so
+    // that its many small runs do not each start Python).
+    const char* env_plots = std::getenv("HOPPER_PLOTS");
+    const bool plots = !vm["no-plots"].as<bool>() && !(env_plots && std::string(env_plots) == "0");
+    opt.after_run = [plots](const std::filesystem::path& store, int code) {
         if (code == campaign::run_stopped) return code;
         std::cout << '\n';
         try {
@@ -159,8 +175,23 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         }
         fs::path out = store;
         out.replace_extension();
-        std::cout << "plots: /usr/bin/python3 analysis/plots.py " << store.string() << " --out "
-                  << out.string() << "_plots\n";
+        const std::string dir = out.string() + "_plots";
+        if (!plots) {
+            std::cout << "figures: campaign plot " << store.string() << " --out " << dir << '\n';
+            std::cout.flush();
+            return code;
+        }
+        // The figures, drawn by analysis/plots.py (a failure here never changes the run's code:
+        // the realizations and the analysis are stored).
+        std::cout << "figures (campaign plot " << store.string() << " --out " << dir << "):\n";
+        try {
+            if (run_python(analysis_dir() / "plots.py", {store.string(), "--out", dir}) != 0)
+                std::cerr << "campaign: note: the figures could not be drawn (see above); the "
+                             "store is complete: retry with `campaign plot "
+                          << store.string() << "`\n";
+        } catch (const std::exception& e) {
+            std::cerr << "campaign: note: no figures: " << e.what() << '\n';
+        }
         std::cout.flush();
         return code;
     };

@@ -1,21 +1,67 @@
 #include "cli/simulate.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "cli/result_output.hpp"
 #include "cli/snapshot_writer.hpp"
+#include "hopper/campaign/plan.hpp"
+#include "hopper/campaign/report.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/engine/realization.hpp"
+#include "hopper/store/store.hpp"
 
 namespace hopper::cli {
 
+StoredTask stored_task(const std::filesystem::path& store_path, const std::string& label,
+                       int realization) {
+    const store::StoreStatus st = store::read_status(store_path);
+    const store::PointPlan* p = st.plan.find(label);
+    if (!p) {
+        std::string labels;
+        for (const auto& q : st.plan.points)
+            labels += "\n  '" + q.label + "'";
+        throw core::ConfigError("--point: no point '" + label + "' in " + store_path.string() +
+                                "; its points are:" + labels);
+    }
+    if (realization < 0 || realization >= p->realizations())
+        throw core::ConfigError("--realization " + std::to_string(realization) + ": point '" +
+                                label + "' has realizations 0.." +
+                                std::to_string(p->realizations() - 1));
+    // The scene: from the sweep texts the store recorded, newest run first; the point's stored
+    // scene text (every parameter) must come out exactly, so the physics is the stored one.
+    for (auto r = st.runs.rbegin(); r != st.runs.rend(); ++r) {
+        config::SweepFile sweep;
+        try {
+            sweep = config::parse_sweep(r->info.sweep_text, r->info.sweep_path);
+        } catch (const core::ConfigError&) {
+            continue;  // a sweep file this version no longer reads
+        }
+        for (const auto& q : sweep.campaign.points) {
+            if (q.label != label) continue;
+            if (campaign::scene_text(q.scene) != p->scene) break;
+            return {q.scene, p->seeds[static_cast<std::size_t>(realization)], p->D_cm, p->theta_deg,
+                    r->info.sweep_path};
+        }
+    }
+    throw core::ConfigError("--point '" + label + "': none of the " +
+                            std::to_string(st.runs.size()) +
+                            " sweep file(s) recorded in the store gives its stored physics with "
+                            "this version of hopper");
+}
+
 int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& err) {
-    const config::SweepFile sweep = config::load_sweep(opt.sweep);
-    const engine::SceneParams scene = config::scene_at(sweep, opt.D_cm, opt.theta_deg);
+    std::optional<StoredTask> stored;
+    if (opt.point) stored = stored_task(*opt.store, *opt.point, opt.realization);
+    const engine::SceneParams scene =
+        stored ? stored->scene
+               : config::scene_at(config::load_sweep(opt.sweep), opt.D_cm, opt.theta_deg);
+    const std::uint64_t seed = stored ? stored->seed : opt.seed;
 
     engine::RunHooks hooks;
     // A failing snapshot write must not throw through the engine: remember it and stop the run.
@@ -24,7 +70,8 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
     std::optional<SnapshotWriter> snapshots;
     if (opt.snapshot_dir) {
         try {
-            snapshots.emplace(*opt.snapshot_dir);
+            snapshots.emplace(*opt.snapshot_dir, engine::derive_constants(scene).dt,
+                              opt.snapshot_formats);
         } catch (const std::exception& e) {
             throw core::ConfigError("--snapshots: cannot use directory '" +
                                     opt.snapshot_dir->string() + "': " + e.what());
@@ -42,23 +89,54 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
         hooks.stop = &stop;
     }
     if (opt.progress) {
+        // Wall-clock rate (simulated seconds per wall second) and, once particles leave, the
+        // time left: the particles still in the hopper at the discharge rate seen so far in wall
+        // time, at most what max_time leaves at the current rate.
+        const auto wall_start = std::chrono::steady_clock::now();
+        struct Since {
+            double wall = -1.0, sim = 0.0;
+            int in_hopper = 0;
+        };
+        auto opened = std::make_shared<Since>();
+        const double max_time = scene.protocol.max_time;
         hooks.progress_interval = opt.progress_interval;
-        hooks.on_progress = [&err](const engine::Progress& p) {
-            char line[160];
+        hooks.on_progress = [&err, wall_start, opened, max_time](const engine::Progress& p) {
+            const double wall =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start)
+                    .count();
+            const bool discharging = p.phase != engine::Phase::settle;
+            if (discharging && opened->wall < 0) *opened = {wall, p.sim_time, p.in_hopper};
+            std::string eta = "?";
+            if (discharging && wall > opened->wall) {
+                const double dw = wall - opened->wall;
+                const int gone = opened->in_hopper - p.in_hopper;
+                const double sim_rate = (p.sim_time - opened->sim) / dw;
+                double left = sim_rate > 0 ? (max_time - p.discharge_time) / sim_rate : -1.0;
+                if (gone > 0) {
+                    const double by_flow = p.in_hopper * dw / gone;
+                    left = left < 0 ? by_flow : std::min(left, by_flow);
+                }
+                if (left >= 0) eta = campaign::format_duration(left);
+            }
+            char line[200];
             std::snprintf(line, sizeof line,
                           "campaign: %-9s t_sim = %8.3f s  t_discharge = %8.3f s  in hopper = %d"
-                          "  jams = %d\n",
+                          "  jams = %d  %.3g sim-s/s  elapsed %s  ETA %s\n",
                           std::string(engine::to_string(p.phase)).c_str(), p.sim_time,
-                          p.discharge_time, p.in_hopper, p.n_jams);
+                          p.discharge_time, p.in_hopper, p.n_jams,
+                          wall > 0 ? p.sim_time / wall : 0.0,
+                          campaign::format_duration(wall).c_str(), eta.c_str());
             err << line << std::flush;
         };
     }
 
-    const engine::RealizationResult result = engine::run_realization(scene, opt.seed, hooks);
+    const engine::RealizationResult result = engine::run_realization(scene, seed, hooks);
     if (!snapshot_error.empty())
         throw std::runtime_error("snapshots stopped the run: " + snapshot_error);
 
-    const RunRequest req{opt.sweep.string(), opt.D_cm, opt.theta_deg, opt.seed};
+    const RunRequest req =
+        stored ? RunRequest{stored->sweep_path, stored->D_cm, stored->theta_deg, seed}
+               : RunRequest{opt.sweep.string(), opt.D_cm, opt.theta_deg, seed};
     if (opt.json) {
         out << result_json(req, result) << '\n';
     } else {
@@ -68,6 +146,41 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
                 << snapshots->directory().string() << '\n';
     }
     out << std::flush;
+    if (stored) {
+        // Bit for bit: the stored realization's outcomes must come out exactly.
+        std::optional<engine::RealizationResult> before;
+        for (auto& r : store::read_journal_realizations(*opt.store))
+            if (r.label == *opt.point && r.record.realization == opt.realization)
+                before = std::move(r.result);
+        if (!before) {
+            err << "campaign: note: realization " << opt.realization << " of '" << *opt.point
+                << "' is not stored yet: nothing to compare with\n";
+        } else {
+            const auto same_events = [](const auto& a, const auto& b) {
+                if (a.size() != b.size()) return false;
+                for (std::size_t i = 0; i < a.size(); ++i)
+                    if (a[i].kind != b[i].kind || a[i].time != b[i].time ||
+                        a[i].sim_time != b[i].sim_time || a[i].in_hopper != b[i].in_hopper)
+                        return false;
+                return true;
+            };
+            const bool same = before->status == result.status &&
+                              before->survival_times == result.survival_times &&
+                              before->censored == result.censored &&
+                              before->jam_onsets == result.jam_onsets &&
+                              before->exit_times == result.exit_times &&
+                              before->curve_count == result.curve_count &&
+                              same_events(before->events, result.events);
+            if (!same) {
+                err << "campaign: error: the run differs from the stored realization "
+                    << opt.realization << " of '" << *opt.point
+                    << "' (another version of hopper or another machine's arithmetic?)\n";
+                return exit_error;
+            }
+            err << "campaign: identical to the stored realization (status, survival times, jam "
+                   "onsets, exit times, discharge curve and events bit for bit)\n";
+        }
+    }
     return result.status == engine::Status::failed ? exit_realization_failed : exit_ok;
 }
 

@@ -12,6 +12,9 @@
 #include <system_error>
 #include <vector>
 
+#include "cli/vtk_writer.hpp"
+#include "hopper/core/error.hpp"
+
 namespace hopper::cli {
 
 namespace {
@@ -71,7 +74,7 @@ void DumpBox::include(const engine::Snapshot& s) {
     zhi = std::max(zhi, r_max);
 }
 
-void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t frame,
+void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t step,
                 const DumpBox& box) {
     check_columns(s);
     const std::size_t n_mobile = s.id.size();
@@ -86,13 +89,13 @@ void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t frame,
 
     std::string out;
     out.reserve(256 + (n_mobile + n_wall) * 120);
-    out += "ITEM: TIMESTEP\n";
-    append_int(out, frame);
-    out += "\nITEM: TIME\n";
+    out += "ITEM: TIME\n";
     append_number(out, s.sim_time);
+    out += "\nITEM: TIMESTEP\n";
+    append_int(out, step);
     out += "\nITEM: NUMBER OF ATOMS\n";
     append_int(out, static_cast<std::int64_t>(n_mobile + n_wall));
-    out += "\nITEM: BOX BOUNDS pp pp pp\n";
+    out += "\nITEM: BOX BOUNDS ff ff pp\n";
     const std::array<std::array<double, 2>, 3> bounds{
         {{b.xlo, b.xhi}, {b.ylo, b.yhi}, {b.zlo, b.zhi}}};
     for (const auto& lh : bounds) {
@@ -122,12 +125,35 @@ void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t frame,
     os << out;
 }
 
-SnapshotWriter::SnapshotWriter(std::filesystem::path dir) : dir_(std::move(dir)) {
+SnapshotFormats parse_snapshot_formats(const std::string& text) {
+    SnapshotFormats f{false, false};
+    std::size_t begin = 0;
+    while (true) {
+        const std::size_t comma = text.find(',', begin);
+        const std::string one =
+            text.substr(begin, comma == std::string::npos ? comma : comma - begin);
+        bool& flag = one == "vtu" ? f.vtu : f.dump;
+        if ((one != "vtu" && one != "dump") || flag)
+            throw core::ConfigError("--snapshot-format: " +
+                                    (one == "vtu" || one == "dump"
+                                         ? "'" + one + "' given twice"
+                                         : "unknown format '" + one + "'") +
+                                    " in '" + text + "' (allowed: vtu, dump or vtu,dump)");
+        flag = true;
+        if (comma == std::string::npos) break;
+        begin = comma + 1;
+    }
+    return f;
+}
+
+SnapshotWriter::SnapshotWriter(std::filesystem::path dir, double dt, SnapshotFormats formats)
+    : dir_(std::move(dir)), dt_(dt), formats_(formats) {
     namespace fs = std::filesystem;
+    if (!(dt_ > 0.0)) throw std::invalid_argument("snapshot writer: dt must be > 0");
     fs::create_directories(dir_);
     if (!fs::is_directory(dir_))
         throw std::runtime_error("snapshot directory " + dir_.string() + " is not a directory");
-    static const std::regex frame_name(R"(hopper\.[0-9]+\.dump)");
+    static const std::regex frame_name(R"(hopper\.([0-9]+\.(dump|vtu)|pvd))");
     std::vector<fs::path> stale;
     for (const auto& entry : fs::directory_iterator(dir_)) {
         if (entry.is_regular_file() &&
@@ -139,23 +165,48 @@ SnapshotWriter::SnapshotWriter(std::filesystem::path dir) : dir_(std::move(dir))
 }
 
 std::filesystem::path SnapshotWriter::frame_path(const std::filesystem::path& dir,
-                                                 std::int64_t frame) {
+                                                 std::int64_t frame, const char* extension) {
     char name[64];
-    std::snprintf(name, sizeof name, "hopper.%06lld.dump", static_cast<long long>(frame));
+    std::snprintf(name, sizeof name, "hopper.%06lld.%s", static_cast<long long>(frame), extension);
     return dir / name;
 }
 
-std::filesystem::path SnapshotWriter::write(const engine::Snapshot& s) {
-    box_.include(s);
-    const auto path = frame_path(dir_, frames_);
+namespace {
+
+template <class Write>
+void write_file(const std::filesystem::path& path, Write write) {
     std::ofstream os(path, std::ios::binary | std::ios::trunc);
     if (!os)
         throw std::runtime_error("cannot open snapshot file " + path.string() + " for writing");
-    write_dump(os, s, frames_, box_);
+    write(os);
     os.close();
     if (!os) throw std::runtime_error("cannot write snapshot file " + path.string());
+}
+
+}  // namespace
+
+std::filesystem::path SnapshotWriter::write(const engine::Snapshot& s) {
+    box_.include(s);
+    // Snapshots are taken between steps, so the time is a whole number of steps up to rounding.
+    const auto step = static_cast<std::int64_t>(std::llround(s.sim_time / dt_));
+    std::filesystem::path written;
+    if (formats_.dump) {
+        written = frame_path(dir_, frames_, "dump");
+        write_file(written, [&](std::ostream& os) { write_dump(os, s, step, box_); });
+    }
+    if (formats_.vtu) {
+        written = frame_path(dir_, frames_, "vtu");
+        write_file(written, [&](std::ostream& os) { write_vtu(os, s, step); });
+        times_.push_back(s.sim_time);
+        std::vector<PvdEntry> entries;
+        for (std::size_t k = 0; k < times_.size(); ++k)
+            entries.push_back(
+                {times_[k], frame_path({}, static_cast<std::int64_t>(k), "vtu").string()});
+        // The series is rewritten after every frame, so it is complete whenever the run stops.
+        write_file(dir_ / "hopper.pvd", [&](std::ostream& os) { write_pvd(os, entries); });
+    }
     ++frames_;
-    return path;
+    return written;
 }
 
 }  // namespace hopper::cli

@@ -3,9 +3,14 @@
 
 #include <boost/program_options.hpp>
 #include <cstdio>
+#include <ctime>
 #include <iostream>
+#include <map>
 
 #include "cli/json_writer.hpp"
+#include "hopper/campaign/plan.hpp"
+#include "hopper/campaign/report.hpp"
+#include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
 
@@ -38,7 +43,59 @@ std::string hosts_text(const std::vector<std::string>& hosts) {
     return s;
 }
 
+// "2024-05-01T12:00:00Z" -> s since 1970 (0 when unreadable).
+double iso_to_unix(const std::string& t) {
+    std::tm tm{};
+    if (!strptime(t.c_str(), "%Y-%m-%dT%H:%M:%SZ", &tm)) return 0.0;
+    return static_cast<double>(timegm(&tm));
+}
+
 }  // namespace
+
+ProgressEstimate estimate_progress(const store::StoreStatus& s, double now_unix) {
+    ProgressEstimate e;
+    if (s.runs.empty()) return e;
+    const auto& last = s.runs.back();
+    e.workers = std::max(1, last.info.workers);
+    const double start = iso_to_unix(last.info.start_time);
+    const double end = last.end ? iso_to_unix(last.end->end_time) : now_unix;
+    if (start > 0 && end > start) e.per_hour = last.stored / (end - start) * 3600.0;
+    // Cost of one realization of each point, from the newest sweep text that has the point.
+    std::map<std::string, double> cost;
+    for (auto r = s.runs.rbegin(); r != s.runs.rend(); ++r) {
+        try {
+            const auto sweep = config::parse_sweep(r->info.sweep_text, r->info.sweep_path);
+            for (const auto& p : sweep.campaign.points)
+                cost.try_emplace(p.label, campaign::expected_cost(p.scene));
+        } catch (const std::exception&) {
+            // a sweep text this version no longer reads: its points keep the mean cost
+        }
+    }
+    double known = 0.0;
+    for (const auto& [label, c] : cost)
+        known += c;
+    const double mean_cost = cost.empty() ? 0.0 : known / static_cast<double>(cost.size());
+    campaign::CostEta eta(e.workers);
+    int pending = 0;
+    for (const auto& p : s.points) {
+        const auto it = cost.find(p.label);
+        const double c = it != cost.end() ? it->second : mean_cost;
+        eta.add_pending(c, p.pending);
+        eta.finished(c, p.task_seconds, p.timed, false);
+        pending += p.pending;
+    }
+    e.basis = eta.measured() ? "cost model, scaled to the worker time of the stored realizations"
+                             : "cost model at 50 ns per particle-step (nothing measured yet)";
+    if (pending > 0 && eta.seconds_left() > 0) e.eta_seconds = eta.seconds_left();
+    if (s.writer_active && !last.end) {
+        for (int rank = 1; rank <= e.workers; ++rank) {
+            const auto it = last.last_result_unix.find(rank);
+            const double since = it != last.last_result_unix.end() ? it->second : start;
+            if (since > 0) e.busy.emplace_back(rank, std::max(0.0, now_unix - since));
+        }
+    }
+    return e;
+}
 
 void print_status_help(std::ostream& os) {
     os << "usage: campaign status STORE.h5 [--json]\n\n"
@@ -60,6 +117,22 @@ std::string status_json(const store::StoreStatus& s) {
     w.field("failed", s.failed);
     w.field("errors", s.errors);
     w.field("pending", s.pending);
+    const ProgressEstimate pe = estimate_progress(s, store::unix_now());
+    w.field("per_hour", pe.per_hour);
+    w.key("eta_seconds");
+    if (pe.eta_seconds)
+        w.value(*pe.eta_seconds);
+    else
+        w.null();
+    w.field("eta_basis", pe.basis);
+    w.key("busy_workers").begin_array();
+    for (const auto& [rank, age] : pe.busy) {
+        w.begin_object_inline();
+        w.field("rank", rank);
+        w.field("seconds", age);
+        w.end_object();
+    }
+    w.end_array();
     w.key("points").begin_array();
     for (const auto& p : s.points) {
         w.begin_object_inline();
@@ -123,6 +196,27 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
     out << "progress  " << s.done << "/" << s.total << " done, " << s.failed << " failed";
     if (s.errors) out << " (" << s.errors << " by exceptions, retried by the next run)";
     out << ", " << s.pending << " pending\n";
+    const ProgressEstimate pe = estimate_progress(s, store::unix_now());
+    if (!s.runs.empty()) {
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      pe.per_hour >= 10 ? "rate      %.0f realizations per hour (last run)"
+                                        : "rate      %.2g realizations per hour (last run)",
+                      pe.per_hour);
+        out << line;
+        if (pe.eta_seconds)
+            out << "; " << (s.writer_active ? "ETA " : "the pending ones take about ")
+                << campaign::format_duration(*pe.eta_seconds) << " on " << pe.workers
+                << " worker(s) (" << pe.basis << ")";
+        out << '\n';
+        if (!pe.busy.empty()) {
+            out << "workers   ";
+            for (std::size_t k = 0; k < pe.busy.size(); ++k)
+                out << (k ? ", " : "") << "rank " << pe.busy[k].first << " busy "
+                    << campaign::format_duration(pe.busy[k].second);
+            out << " (since its last result or the run's start)\n";
+        }
+    }
     if (!s.runs.empty()) {
         const auto& r = s.runs.back();
         out << "runs      " << s.runs.size() << "; last started " << r.info.start_time << " on "

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+#include <algorithm>
 
 #include "hopper/core/error.hpp"
 
@@ -117,7 +118,11 @@ std::int64_t State::apply(const ResultRecord& r, const engine::RealizationResult
     e.result = summarize(result, r);
     e.state = result.status == engine::Status::failed ? TaskState::failed : TaskState::done;
     e.row = rows++;
-    if (!runs.empty()) ++runs.back().stored;
+    if (!runs.empty()) {
+        ++runs.back().stored;
+        double& last = runs.back().last_result_unix[r.rank];
+        last = std::max(last, r.finished_unix);
+    }
     return e.row;
 }
 
@@ -159,6 +164,10 @@ StoreStatus State::status() const {
             if (static_cast<int>(r) >= ps.planned) {
                 if (e.result) ++ps.extra;
                 continue;
+            }
+            if (e.result) {
+                ++ps.timed;
+                ps.task_seconds += e.result->task_seconds;
             }
             switch (e.state) {
                 case TaskState::done: {

@@ -383,6 +383,7 @@ StoreStatus read_status(const fs::path& store) {
     s.hdf5_in_step = !s.writer_active && state.closed_in_step() && fs::exists(store, ec);
     s.journal_bytes = scan.valid_bytes;
     s.torn_bytes = scan.torn_bytes();
+    s.plan = std::move(state.plan);
     return s;
 }
 

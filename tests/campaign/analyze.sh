@@ -1,7 +1,7 @@
 #!/bin/bash
 # `campaign analyze` and analysis/plots.py end to end on mini.toml (12 realizations, 3 outlets):
 # - `campaign run` analyzes at the end (/analysis written) and prints the plots command;
-# - `analyze --json` parses, has every key of the README, and agrees with the raw realizations
+# - `analyze --json` parses, has every key of docs/statistics.md, and agrees with the raw realizations
 #   read with h5py (tau = total time / jams, counts, means); a point without jams has
 #   tau_mle null with a reason; the /analysis datasets have units, descriptions, no NaN;
 # - re-analysis replaces the group (same members, one row per point, no duplicates);
@@ -10,7 +10,7 @@
 source "$(dirname "$0")/lib.sh"
 reference
 expect_in ref.out "analysis written to $WORK/ref.h5:/analysis"
-expect_in ref.out "plots: /usr/bin/python3 analysis/plots.py $WORK/ref.h5 --out $WORK/ref_plots"
+expect_in ref.out "figures: campaign plot $WORK/ref.h5 --out $WORK/ref_plots"
 
 run_expect 0 json "$EXE" analyze "$WORK/ref.h5" --json
 "$PY" "$SRC/tests/campaign/check_analysis.py" json.out "$WORK/ref.h5" || fail "check_analysis.py"

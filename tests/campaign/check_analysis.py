@@ -2,7 +2,7 @@
 
 usage: check_analysis.py ANALYZE.json STORE.h5
 
-- the output is one JSON object with every key the README lists (no NaN: json.load with
+- the output is one JSON object with every key docs/statistics.md lists (no NaN: json.load with
   parse_constant rejecting NaN/Infinity);
 - per point: realizations, status counts, jams, shakes, survival intervals, total observed time,
   tau = T / r, the algebraic mean, empty-time mean and standard deviation, discharge-rate mean

@@ -1,4 +1,4 @@
-"""Reads a finished campaign store with h5py and checks what the README (store layout) promises.
+"""Reads a finished campaign store with h5py and checks what docs/store.md (the HDF5 layout) promises.
 
 usage: check_store.py STORE.h5 CAMPAIGN_EXE SWEEP.toml
 

@@ -5,6 +5,7 @@
 set -u
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_rmaps_base_oversubscribe=1  # more ranks than cores (the master sleeps)
+export HOPPER_PLOTS=0  # no figures at the end of every small run (analysis.store checks them)
 MINI=$SRC/tests/campaign/data/mini.toml
 DATA=$SRC/tests/campaign/data
 rm -rf "$WORK" && mkdir -p "$WORK" && cd "$WORK" || exit 1

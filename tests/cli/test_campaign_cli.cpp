@@ -245,13 +245,16 @@ TEST(CampaignCli, SnapshotsWriteDumpFrames) {
     const Outcome r = campaign("simulate " + quote(tiny) + scene + " --seed 1 --snapshots " +
                                quote(dir) + " --snapshot-interval 0.1");
     ASSERT_EQ(r.code, 0) << r.err;
-    int frames = 0;
+    int frames = 0, vtu = 0;
     for (const auto& e : fs::directory_iterator(dir)) {
-        EXPECT_TRUE(
-            std::regex_match(e.path().filename().string(), std::regex(R"(hopper\.[0-9]{6}\.dump)")))
+        const std::string name = e.path().filename().string();
+        EXPECT_TRUE(std::regex_match(name, std::regex(R"(hopper\.([0-9]{6}\.(dump|vtu)|pvd))")))
             << e.path();
-        ++frames;
+        frames += name.ends_with(".dump");
+        vtu += name.ends_with(".vtu");
     }
+    EXPECT_EQ(vtu, frames);  // both formats by default, frame by frame
+    EXPECT_TRUE(fs::exists(dir / "hopper.pvd"));
     EXPECT_GE(frames, 2);
     EXPECT_NE(r.out.find(std::to_string(frames) + " frames"), std::string::npos) << r.out;
 
@@ -260,10 +263,10 @@ TEST(CampaignCli, SnapshotsWriteDumpFrames) {
     for (std::string l; std::getline(first, l);)
         lines.push_back(l);
     ASSERT_GT(lines.size(), 11u);
-    EXPECT_EQ(lines[0], "ITEM: TIMESTEP");
-    EXPECT_EQ(lines[1], "1");
-    EXPECT_EQ(lines[2], "ITEM: TIME");
-    EXPECT_NEAR(std::stod(lines[3]), 0.1, 0.02);  // about one interval after the first frame
+    EXPECT_EQ(lines[0], "ITEM: TIME");
+    EXPECT_NEAR(std::stod(lines[1]), 0.1, 0.02);  // about one interval after the first frame
+    EXPECT_EQ(lines[2], "ITEM: TIMESTEP");
+    EXPECT_GT(std::stoll(lines[3]), 100);  // the step number, not the frame index 1
     EXPECT_EQ(lines[4], "ITEM: NUMBER OF ATOMS");
     const int atoms = std::stoi(lines[5]);
     EXPECT_GT(atoms, 250);  // 250 mobile particles plus the walls

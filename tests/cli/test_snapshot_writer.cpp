@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "hopper/core/error.hpp"
+
 namespace hopper::cli {
 namespace {
 
@@ -53,20 +55,22 @@ fs::path fresh_dir(const std::string& name) {
 TEST(SnapshotWriter, WritesOneLammpsDumpPerFrame) {
     const Fixture f;
     const fs::path dir = fresh_dir("dump_basic") / "nested";
-    SnapshotWriter writer(dir);  // creates the directory with its parents
+    // dt = 1e-4 s: the frame at t = 1.25 s is step 12500
+    SnapshotWriter writer(dir, 1e-4, {false, true});  // creates the directory with its parents
     ASSERT_TRUE(fs::is_directory(dir));
 
     const fs::path p0 = writer.write(f.snapshot(1.25));
     EXPECT_EQ(p0, dir / "hopper.000000.dump");
     const auto lines = read_lines(p0);
     ASSERT_EQ(lines.size(), 11u + 5u);  // 11 header lines, 3 mobile + 2 wall
-    EXPECT_EQ(lines[0], "ITEM: TIMESTEP");
-    EXPECT_EQ(lines[1], "0");
-    EXPECT_EQ(lines[2], "ITEM: TIME");
-    EXPECT_DOUBLE_EQ(std::stod(lines[3]), 1.25);
+    // LAMMPS's order with `dump_modify time yes`: TIME before TIMESTEP
+    EXPECT_EQ(lines[0], "ITEM: TIME");
+    EXPECT_DOUBLE_EQ(std::stod(lines[1]), 1.25);
+    EXPECT_EQ(lines[2], "ITEM: TIMESTEP");
+    EXPECT_EQ(lines[3], "12500");  // the step number, not the frame index
     EXPECT_EQ(lines[4], "ITEM: NUMBER OF ATOMS");
     EXPECT_EQ(lines[5], "5");
-    EXPECT_EQ(lines[6], "ITEM: BOX BOUNDS pp pp pp");
+    EXPECT_EQ(lines[6], "ITEM: BOX BOUNDS ff ff pp");  // walled in x and y
     EXPECT_EQ(lines[10], "ITEM: ATOMS id type x y z vx vy vz radius omegaz");
 
     // Box: every particle inside, padded by the largest diameter; thin slab in z.
@@ -102,14 +106,15 @@ TEST(SnapshotWriter, WritesOneLammpsDumpPerFrame) {
 
     const fs::path p1 = writer.write(f.snapshot(1.30));
     EXPECT_EQ(p1, dir / "hopper.000001.dump");
-    EXPECT_EQ(read_lines(p1)[1], "1");
+    EXPECT_EQ(read_lines(p1)[3], "13000");
+    EXPECT_FALSE(fs::exists(dir / "hopper.000000.vtu"));  // only the format asked for
     EXPECT_EQ(writer.frames_written(), 2);
 }
 
 TEST(SnapshotWriter, BoxOnlyGrows) {
     Fixture f;
     const fs::path dir = fresh_dir("dump_box");
-    SnapshotWriter writer(dir);
+    SnapshotWriter writer(dir, 1e-4, {false, true});
     writer.write(f.snapshot(0.0));
     f.x = {0.0, 0.0, 0.0};  // everything moves inwards and down
     f.y = {-0.2, -0.2, -0.2};
@@ -125,8 +130,12 @@ TEST(SnapshotWriter, ReplacesStaleFramesOnly) {
     std::ofstream(dir / "hopper.000123.dump") << "old\n";
     std::ofstream(dir / "notes.txt") << "keep\n";
     std::ofstream(dir / "hopper.final.dump") << "keep\n";
-    SnapshotWriter writer(dir);
+    std::ofstream(dir / "hopper.000007.vtu") << "old\n";
+    std::ofstream(dir / "hopper.pvd") << "old\n";
+    SnapshotWriter writer(dir, 1e-4);
     EXPECT_FALSE(fs::exists(dir / "hopper.000123.dump"));
+    EXPECT_FALSE(fs::exists(dir / "hopper.000007.vtu"));
+    EXPECT_FALSE(fs::exists(dir / "hopper.pvd"));
     EXPECT_TRUE(fs::exists(dir / "notes.txt"));
     EXPECT_TRUE(fs::exists(dir / "hopper.final.dump"));
 }
@@ -149,7 +158,45 @@ TEST(SnapshotWriter, FailsClearlyWhenTheDirectoryIsAFile) {
     const fs::path dir = fresh_dir("dump_file");
     fs::create_directories(dir.parent_path());
     std::ofstream(dir) << "a file\n";
-    EXPECT_ANY_THROW(SnapshotWriter{dir});
+    EXPECT_ANY_THROW((SnapshotWriter{dir, 1e-4}));
+}
+
+TEST(SnapshotWriter, WritesVtuFramesAndTheirSeries) {
+    const Fixture f;
+    const fs::path dir = fresh_dir("vtu_basic");
+    SnapshotWriter writer(dir, 1e-4, {true, false});
+    EXPECT_EQ(writer.write(f.snapshot(1.25)), dir / "hopper.000000.vtu");
+    writer.write(f.snapshot(1.30));
+    EXPECT_FALSE(fs::exists(dir / "hopper.000000.dump"));
+    std::ifstream in(dir / "hopper.000000.vtu");
+    const std::string vtu((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(vtu.find("NumberOfPoints=\"5\" NumberOfCells=\"5\""), std::string::npos) << vtu;
+    for (const char* name : {"\"id\"", "\"type\"", "\"radius\"", "\"velocity\"",
+                             "\"angular_velocity\"", "\"TIME\"", "\"TIMESTEP\""})
+        EXPECT_NE(vtu.find(name), std::string::npos) << name;
+    // ids as the dump's: engine id + 1, walls from wall_id_base + 1
+    EXPECT_NE(vtu.find("1 8 5 1000000001 1000000002"), std::string::npos) << vtu;
+    EXPECT_NE(vtu.find("12500"), std::string::npos);  // TIMESTEP
+    // velocity of the second particle (0, 0.125, 0) and its omega
+    EXPECT_NE(vtu.find("0.5 -1 0 0 0.125 0 -0.25 2 0 0 0 0 0 0 0"), std::string::npos) << vtu;
+    const auto pvd = read_lines(dir / "hopper.pvd");
+    std::string all;
+    for (const auto& l : pvd)
+        all += l + "\n";
+    EXPECT_NE(all.find("timestep=\"1.25\" part=\"0\" file=\"hopper.000000.vtu\""),
+              std::string::npos)
+        << all;
+    EXPECT_NE(all.find("timestep=\"1.3\" part=\"0\" file=\"hopper.000001.vtu\""), std::string::npos)
+        << all;
+}
+
+TEST(SnapshotWriter, ParsesFormats) {
+    EXPECT_TRUE(parse_snapshot_formats("vtu").vtu);
+    EXPECT_FALSE(parse_snapshot_formats("vtu").dump);
+    EXPECT_TRUE(parse_snapshot_formats("dump,vtu").dump);
+    EXPECT_THROW(parse_snapshot_formats("vtk"), core::ConfigError);
+    EXPECT_THROW(parse_snapshot_formats("vtu,vtu"), core::ConfigError);
+    EXPECT_THROW(parse_snapshot_formats(""), core::ConfigError);
 }
 
 }  // namespace

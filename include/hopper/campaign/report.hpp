@@ -16,10 +16,35 @@ std::string format_duration(double seconds);
 std::string progress_line(int done, int total, int running, int failed, double rate,
                           double elapsed);
 
+// The time left, weighted by the cost model: the pending tasks' expected costs (expected_cost in
+// plan.hpp: particle-steps) times the measured worker seconds per cost unit of the tasks finished
+// so far, divided by the workers. Before any task has finished, `prior_seconds_per_cost` (50 ns
+// per particle-step, docs/performance.md), so there is an estimate from the start; unlike a
+// count of realizations it does not mislead when the most expensive tasks run first.
+// `campaign status` uses it; the master's progress line can (report each result to finished()).
+class CostEta {
+  public:
+    explicit CostEta(int workers, double prior_seconds_per_cost = 50e-9);
+    void add_pending(double cost, int tasks = 1);
+    // `tasks` tasks of `cost` each finished (removed from the pending cost if they were added),
+    // taking `worker_seconds` of worker time in all.
+    void finished(double cost, double worker_seconds, int tasks = 1, bool was_pending = true);
+    double seconds_per_cost() const;
+    double seconds_left() const;  // 0 when nothing is pending
+    bool measured() const { return cost_done_ > 0; }
+
+  private:
+    int workers_;
+    double prior_;
+    double pending_cost_ = 0.0;
+    double cost_done_ = 0.0;
+    double seconds_done_ = 0.0;
+};
+
 // One row per point of `labels` (the sweep's points, in order): realizations stored/planned,
 // failed, jams, mean survival time (total survival time / jams: the censored-exponential
 // maximum-likelihood mean; "-" without jams), mean empty time over the realizations that
-// emptied.
+// emptied; then a line saying what tau is.
 void write_summary(std::ostream& out, const store::StoreStatus& status,
                    const std::vector<std::string>& labels);
 

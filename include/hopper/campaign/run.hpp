@@ -31,6 +31,10 @@ struct RunOptions {
     MasterOptions master;
     store::StoreOptions store_options;
     int threads = 1;  // worker threads in a single-process run (ignored under MPI)
+    bool threads_given = false;
+    // Accept new points whose unvaried settings differ from stored points' (mixing.hpp); by
+    // default such a sweep is refused.
+    bool allow_mixed = false;  // --threads was on the command line: say so when MPI ignores it
     std::string code_version = "unknown";
     std::string command_line;
     // One realization (default: engine::run_realization(scene, task.seed, hooks)). Benchmarks

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -75,12 +76,16 @@ struct PointStatus {
     double survival_sum = 0.0;  // s, all intervals
     int emptied = 0;            // realizations with an empty time
     double empty_sum = 0.0;     // s
+    int timed = 0;              // planned realizations with a result (failed included) ...
+    double task_seconds = 0.0;  // ... and their wall-clock seconds on the workers
 };
 
 struct RunSummary {
     RunInfo info;
     std::optional<RunEndRecord> end;  // absent: still running, or killed
     int stored = 0;                   // results recorded by this run
+    // Each worker's (rank's) latest result in this run, s since 1970 (finished_unix).
+    std::map<int, double> last_result_unix;
 };
 
 struct Failure {
@@ -106,6 +111,7 @@ struct StoreStatus {
     bool hdf5_in_step = false;      // the HDF5 file was closed in step with the journal
     std::uint64_t journal_bytes = 0;
     std::uint64_t torn_bytes = 0;  // an incomplete last record (in progress or torn)
+    CampaignPlan plan;             // the union of every run's plan (labels, scene texts, seeds)
 };
 
 // Progress and failures from the journal. Never blocks or disturbs a writer.

@@ -1,0 +1,464 @@
+"""Read a hopper campaign store (STORE.h5) into pandas DataFrames and xarray Datasets.
+
+    import sys; sys.path.insert(0, "analysis")      # or PYTHONPATH=analysis
+    from hopper_store import open_store
+    with open_store("build/quickstart.h5") as s:
+        s.points          # one row per point: label, D_cm, theta_deg, every scene setting typed
+        s.realizations    # one row per stored realization (status, jams, empty time, rates, ...)
+        s.survival        # one row per survival interval: duration (s), event (1 jam, 0 censored)
+        s.events, s.curves, s.jams, s.exits      # the ragged per-realization arrays, long form
+        s.analysis        # /analysis/points (after `campaign analyze`; NaN where not computable)
+        s.beverloo, s.jam_rate, s.km              # the fits and Kaplan-Meier curves of /analysis
+        s.fields()        # {label: xarray.Dataset} merged field maps (/analysis/fields)
+        s.varied          # the scene settings whose value differs between points
+
+A point's settings come from its canonical scene text (/points/scene: every scene parameter,
+SI units, one `name=value` a line), not from its label, so every column has its type (numbers
+float64, integers int64, choices str) and a setting that differs between points is found even
+when the labels do not show it (a store extended with --allow-mixed). Numbers in SI as stored,
+plus the label's units for the outlet and the angle (D_cm, theta_deg).
+
+Reading needs Debian's python3-h5py, -numpy and -pandas; fields() also python3-xarray. The store
+must not be written at the time (after `campaign run` has ended; `campaign status` works during).
+"""
+import math
+
+import h5py
+import numpy as np
+import pandas as pd
+
+__all__ = ["open_store", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
+
+# Scene parameter -> (short symbol for legends, unit shown, factor from the stored SI value).
+# Parameters not listed are shown by their name and stored value.
+SETTING_INFO = {
+    "hopper.outlet_m": ("D", "cm", 100.0),
+    "hopper.theta_rad": ("\u03b8", "\u00b0", 180.0 / math.pi),
+    "hopper.width_m": ("W", "cm", 100.0),
+    "hopper.wall_diameter_m": ("d_w", "cm", 100.0),
+    "particles.count": ("N", "", 1.0),
+    "particles.small_fraction": ("f_small", "", 1.0),
+    "particles.d_small_m": ("d_s", "cm", 100.0),
+    "particles.d_large_m": ("d_l", "cm", 100.0),
+    "material.e_n": ("e", "", 1.0),
+    "material.mu": ("\u03bc", "", 1.0),
+    "walls.e_n": ("e_w", "", 1.0),
+    "walls.mu": ("\u03bc_w", "", 1.0),
+    "material.kt_over_kn": ("k_t/k_n", "", 1.0),
+    "material.collision_time_s": ("\u03c4_c", "s", 1.0),
+    "integrator.scheme": ("", "", 1.0),
+    "integrator.steps_per_collision": ("\u03b4", "", 1.0),
+    "protocol.shake_direction_rad": ("shake", "\u00b0", 180.0 / math.pi),
+}
+
+
+def _typed(text):
+    """A scene value as int, float, None ('unset') or str."""
+    if text == "unset":
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def parse_scene(text):
+    """A point's canonical scene text -> {name: typed value}, in the text's order."""
+    out = {}
+    for line in text.splitlines():
+        name, eq, value = line.partition("=")
+        if eq:
+            out[name] = _typed(value)
+    return out
+
+
+def setting_text(name, value):
+    """Short legend text of one setting: 'D = 2.7 cm', 'theta = 45 deg', 'mu = 0.5', 'gear4'."""
+    symbol, unit, factor = SETTING_INFO.get(name, (name, "", 1.0))
+    if isinstance(value, str) or value is None:
+        return ("%s = %s" % (symbol, value)) if symbol else str(value)
+    v = float(value) * factor
+    num = "%.4g" % v
+    if unit == "\u00b0":
+        return "%s = %s%s" % (symbol, num, unit)
+    return "%s = %s%s" % (symbol, num, (" " + unit) if unit else "")
+
+
+def _same_partition(a, b):
+    """True when two columns split the rows into the same groups."""
+    ka = pd.factorize(a.astype(str))[0]
+    kb = pd.factorize(b.astype(str))[0]
+    return bool(np.array_equal(ka, kb))
+
+
+def varied_settings(points, scene_columns):
+    """The scene settings whose value differs between points, without those that only follow
+    another (walls.mu that follows material.mu): the outlet and the angle first, then the
+    others in scene-text order."""
+    order = [c for c in ("hopper.outlet_m", "hopper.theta_rad") if c in scene_columns]
+    order += [c for c in scene_columns if c not in order]
+    kept = []
+    for c in order:
+        col = points[c]
+        if col.astype(str).nunique(dropna=False) < 2:
+            continue
+        if any(_same_partition(points[k], col) for k in kept):
+            continue
+        kept.append(c)
+    return kept
+
+
+class Store:
+    """An open store; DataFrames are read on first use and kept. Use as a context manager or
+    call close()."""
+
+    def __init__(self, path):
+        self.path = str(path)
+        try:
+            self._f = h5py.File(self.path, "r")
+        except OSError as e:
+            raise OSError("cannot read store '%s': %s (is a `campaign run` writing it?)"
+                          % (self.path, e)) from e
+        if self._f.attrs.get("format", "") != "hopper campaign store":
+            self._f.close()
+            raise ValueError("'%s' is not a hopper campaign store" % self.path)
+        self.name = str(self._f.attrs.get("campaign_name", ""))
+        self._cache = {}
+        self._fields = None
+
+    @classmethod
+    def from_frames(cls, name, frames, fields=None):
+        """A Store over given tables instead of a file (synthetic data for tests and figure
+        previews): `frames` maps points (with a 'label', 'D_cm', 'theta_deg' and scene columns),
+        scene_columns (their names), and any of realizations, survival, events, curves, jams,
+        exits, analysis, beverloo, jam_rate, km to DataFrames shaped as the properties return;
+        `fields` is what fields() returns."""
+        s = cls.__new__(cls)
+        s.path, s._f, s.name = "<%s>" % name, None, name
+        s._cache = dict(frames)
+        s._fields = fields or {}
+        return s
+
+    # --- housekeeping -----------------------------------------------------------------------
+    def close(self):
+        if self._f is not None:
+            self._f.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _cached(self, key, make):
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
+    @property
+    def has_analysis(self):
+        if self._f is None:
+            return "analysis" in self._cache
+        return "analysis" in self._f and "points" in self._f["analysis"]
+
+    # --- points -------------------------------------------------------------------------------
+    @property
+    def points(self):
+        """One row per point (index: the point's row in /points)."""
+        return self._cached("points", self._read_points)
+
+    @property
+    def scene_columns(self):
+        self.points
+        return self._cache["scene_columns"]
+
+    @property
+    def varied(self):
+        """Scene settings that differ between points (see varied_settings)."""
+        return self._cached("varied", lambda: varied_settings(self.points, self.scene_columns))
+
+    @property
+    def group_settings(self):
+        """The varied settings other than the outlet: a 'group' is one value of each."""
+        return [c for c in self.varied if c != "hopper.outlet_m"]
+
+    def _read_points(self):
+        p = self._f["points"]
+        labels = p["label"].asstr()[:]
+        scenes = [parse_scene(s) for s in p["scene"].asstr()[:]]
+        names = []
+        for sc in scenes:
+            names += [k for k in sc if k not in names]
+        df = pd.DataFrame({
+            "label": labels,
+            "D_cm": p["D_cm"][:].astype(float),
+            "theta_deg": p["theta_deg"][:].astype(float),
+            "particles": p["particles"][:].astype(np.int64),
+            "realizations_planned": p["realizations"][:].astype(np.int64),
+            "physics_hash": p["physics_hash"].asstr()[:] if h5py.check_string_dtype(
+                p["physics_hash"].dtype) else p["physics_hash"][:],
+        })
+        for n in names:
+            values = [sc.get(n) for sc in scenes]
+            kinds = {type(v) for v in values if v is not None}
+            if kinds <= {int}:
+                col = pd.array(values, dtype="Int64") if None in values else \
+                    np.array(values, dtype=np.int64)
+            elif kinds <= {int, float}:
+                col = np.array([np.nan if v is None else float(v) for v in values])
+            else:
+                col = np.array(["" if v is None else str(v) for v in values], dtype=object)
+            df[n] = col
+        df.index.name = "point"
+        self._cache["scene_columns"] = names
+        return df
+
+    def group_of(self, point):
+        """Short text of a point's group (its varied settings other than D), e.g. 'theta = 45'."""
+        row = self.points.loc[point]
+        return ", ".join(setting_text(c, row[c]) for c in self.group_settings)
+
+    def groups(self):
+        """{group text: [point rows sorted by D]} in order of first appearance."""
+        out = {}
+        for i in self.points.index:
+            out.setdefault(self.group_of(i), []).append(i)
+        return {g: sorted(rows, key=lambda i: self.points.at[i, "D_cm"]) for g, rows in out.items()}
+
+    # --- realizations -------------------------------------------------------------------------
+    @property
+    def realizations(self):
+        """One row per stored realization (index: its row in /realizations)."""
+        return self._cached("realizations", self._read_realizations)
+
+    def _read_realizations(self):
+        r = self._f["realizations"]
+        n = r["point"].shape[0]
+        cols = {}
+        for k in r:
+            d = r[k]
+            if not isinstance(d, h5py.Dataset) or d.shape != (n,):
+                continue
+            enum = h5py.check_enum_dtype(d.dtype)
+            if enum is not None and set(enum) != {"FALSE", "TRUE"}:
+                names = {v: key for key, v in enum.items()}
+                cols[k] = np.array([names[v] for v in d[:]], dtype=object)
+            elif h5py.check_string_dtype(d.dtype):
+                cols[k] = d.asstr()[:]
+            else:
+                cols[k] = d[:]
+        df = pd.DataFrame(cols)
+        for name in ("empty_time", "discharge_rate"):
+            if "has_" + name in df:
+                df[name] = df[name].where(df["has_" + name].astype(bool))
+                df = df.drop(columns="has_" + name)
+        if "discharge_rate_mass" in df and "discharge_rate" in df:
+            df["discharge_rate_mass"] = df["discharge_rate_mass"].where(df["discharge_rate"].notna())
+        p = self.points
+        df.insert(1, "label", p["label"].to_numpy()[df["point"].to_numpy()] if n else [])
+        df.insert(2, "D_cm", p["D_cm"].to_numpy()[df["point"].to_numpy()] if n else [])
+        df.insert(3, "theta_deg", p["theta_deg"].to_numpy()[df["point"].to_numpy()] if n else [])
+        first = ["point", "label", "D_cm", "theta_deg", "realization", "seed", "status", "message"]
+        df = df[[c for c in first if c in df] + [c for c in df if c not in first]]
+        df.index.name = "row"
+        return df
+
+    def _ragged(self, family, names, rename=None):
+        """Long form of a ragged family: one row per value, with the realization's row, point
+        and index."""
+        r = self._f["realizations"]
+        start = r[family + "_start"][:].astype(np.int64)
+        length = r[family + "_length"][:].astype(np.int64)
+        rows = np.repeat(np.arange(len(start)), length)
+        idx = np.concatenate([np.arange(s, s + n) for s, n in zip(start, length)]) \
+            if len(start) else np.zeros(0, np.int64)
+        real = self.realizations
+        cols = {"row": rows, "point": real["point"].to_numpy()[rows],
+                "realization": real["realization"].to_numpy()[rows]}
+        for name in names:
+            d = self._f["ragged/" + name]
+            enum = h5py.check_enum_dtype(d.dtype)
+            values = d[:][idx] if len(idx) else d[:0]
+            if enum is not None and set(enum) != {"FALSE", "TRUE"}:
+                inv = {v: key for key, v in enum.items()}
+                values = np.array([inv[v] for v in values], dtype=object)
+            cols[(rename or {}).get(name, name)] = values
+        return pd.DataFrame(cols)
+
+    @property
+    def survival(self):
+        """One row per survival interval: row, point, realization, label, D_cm, theta_deg,
+        interval (0-based within the realization), duration (s of discharge time), event (1: ended
+        by a jam, 0: right-censored). Failed realizations are left out. Ready for
+        lifelines.KaplanMeierFitter().fit(df.duration, df.event) or R's Surv(duration, event)."""
+        def make():
+            df = self._ragged("survival", ["survival_times", "censored"],
+                              {"survival_times": "duration"})
+            df["event"] = (~df.pop("censored").astype(bool)).astype(np.int64)
+            df = self._add_point_columns(df)
+            df.insert(3, "interval", df.groupby("row").cumcount())
+            ok = self.realizations["status"].to_numpy()[df["row"].to_numpy()] != "failed" \
+                if len(df) else np.zeros(0, bool)
+            return df[ok].reset_index(drop=True)
+        return self._cached("survival", make)
+
+    def _add_point_columns(self, df):
+        p = self.points
+        pt = df["point"].to_numpy()
+        df.insert(3, "label", p["label"].to_numpy()[pt] if len(df) else [])
+        df.insert(4, "D_cm", p["D_cm"].to_numpy()[pt] if len(df) else [])
+        df.insert(5, "theta_deg", p["theta_deg"].to_numpy()[pt] if len(df) else [])
+        return df
+
+    @property
+    def events(self):
+        """One row per event: kind (settled, opened, jam, shake_start, ...), time (s of discharge
+        time), sim_time (s since the fill), in_hopper."""
+        return self._cached("events", lambda: self._add_point_columns(self._ragged(
+            "event", ["event_kind", "event_time", "event_sim_time", "event_in_hopper"],
+            {"event_kind": "kind", "event_time": "time", "event_sim_time": "sim_time",
+             "event_in_hopper": "in_hopper"})))
+
+    @property
+    def curves(self):
+        """Discharge curves: one row per sample, time (s of discharge time) and in_hopper."""
+        return self._cached("curves", lambda: self._add_point_columns(self._ragged(
+            "curve", ["curve_time", "curve_in_hopper"],
+            {"curve_time": "time", "curve_in_hopper": "in_hopper"})))
+
+    @property
+    def jams(self):
+        """One row per jam: onset (s of discharge time), shakes (to restart the flow)."""
+        return self._cached("jams", lambda: self._add_point_columns(self._ragged(
+            "jam", ["jam_onsets", "shakes_per_jam"],
+            {"jam_onsets": "onset", "shakes_per_jam": "shakes"})))
+
+    @property
+    def exits(self):
+        """One row per particle that left: time (s of discharge time)."""
+        return self._cached("exits", lambda: self._add_point_columns(self._ragged(
+            "exit", ["exit_times"], {"exit_times": "time"})))
+
+    # --- /analysis ----------------------------------------------------------------------------
+    def _require_analysis(self):
+        if not self.has_analysis:
+            raise LookupError("'%s' has no /analysis group: run `campaign analyze %s`"
+                              % (self.path, self.path))
+
+    def _table(self, group):
+        cols = {}
+        n = None
+        for k in group:
+            d = group[k]
+            if not isinstance(d, h5py.Dataset) or len(d.shape) != 1:
+                continue
+            if n is None:
+                n = d.shape[0]
+            if d.shape[0] != n:
+                continue
+            cols[k] = d.asstr()[:] if h5py.check_string_dtype(d.dtype) else d[:]
+        df = pd.DataFrame(cols)
+        # a value whose has_<name> flag is FALSE is missing: NaN
+        for k in [c for c in df.columns if c.startswith("has_")]:
+            name = k[4:]
+            flag = df[k].astype(bool)
+            if name in df:
+                df[name] = df[name].where(flag)
+        return df
+
+    @property
+    def analysis(self):
+        """/analysis/points: one row per point (index: point), the statistics of `campaign
+        analyze`; a value that could not be computed is NaN (its has_ flag is kept)."""
+        def make():
+            self._require_analysis()
+            df = self._table(self._f["analysis/points"])
+            row = {lab: i for i, lab in enumerate(self.points["label"])}
+            df.index = [row[lab] for lab in df["label"]]
+            df.index.name = "point"
+            return df
+        return self._cached("analysis", make)
+
+    def _group_table(self, name):
+        def make():
+            self._require_analysis()
+            return self._table(self._f["analysis/" + name])
+        return self._cached(name, make)
+
+    @property
+    def beverloo(self):
+        """/analysis/beverloo: one row per group (C, k with errors, rho_b, d, reason)."""
+        return self._group_table("beverloo")
+
+    @property
+    def jam_rate(self):
+        """/analysis/jam_rate: the exponential and power-law fits of the jam rate per group."""
+        return self._group_table("jam_rate")
+
+    @property
+    def km(self):
+        """Kaplan-Meier curves: point, time (s), survival, std_err."""
+        def make():
+            self._require_analysis()
+            a = self.analysis
+            k = self._f["analysis/km"]
+            t, s, e = k["time"][:], k["survival"][:], k["std_err"][:]
+            parts = []
+            for i in a.index:
+                s0, n = int(a.at[i, "km_start"]), int(a.at[i, "km_length"])
+                parts.append(pd.DataFrame({"point": i, "time": t[s0:s0 + n],
+                                           "survival": s[s0:s0 + n], "std_err": e[s0:s0 + n]}))
+            return pd.concat(parts, ignore_index=True) if parts else \
+                pd.DataFrame(columns=["point", "time", "survival", "std_err"])
+        return self._cached("km", make)
+
+    def fields(self):
+        """{label: xarray.Dataset} of the merged field maps per point (/analysis/fields): data
+        variables windows, weight, mean_F and std_F for F in vx, vy, speed (m/s) and pressure
+        (m g), on coordinates y, x (m, cell centres); NaN where no window reached a cell.
+        Empty when the store has no fields."""
+        import xarray as xr
+        if self._f is None:
+            return self._fields
+        self._require_analysis()
+        a = self._f["analysis"]
+        if "fields" not in a:
+            return {}
+        g = a["fields"]
+        out = {}
+        for label in g["labels"].asstr()[:]:
+            key = label.replace("/", "_")
+            if key not in g:
+                continue
+            h = g[key]
+            nx, ny, cell = int(h.attrs["nx"]), int(h.attrs["ny"]), float(h.attrs["cell"])
+            x = float(h.attrs["x0"]) + cell * (np.arange(nx) + 0.5)
+            y = float(h.attrs["y0"]) + cell * (np.arange(ny) + 0.5)
+            empty = h["windows"][:] == 0
+            data = {}
+            for k in h:
+                d = h[k]
+                if isinstance(d, h5py.Dataset) and d.shape == (ny, nx):
+                    v = d[:].astype(float)
+                    if k.startswith(("mean_", "std_")):
+                        v[empty] = np.nan
+                    data[k] = (("y", "x"), v, {"units": str(d.attrs.get("units", "")),
+                                               "description": str(d.attrs.get("description", ""))})
+            attrs = {}
+            for k, v in h.attrs.items():
+                attrs[k] = v.decode() if isinstance(v, bytes) else v
+            ds = xr.Dataset(data, coords={"x": ("x", x, {"units": "m"}),
+                                          "y": ("y", y, {"units": "m"})}, attrs=attrs)
+            ds["outline_x"] = ("outline", h["outline_x"][:], {"units": "m"})
+            ds["outline_y"] = ("outline", h["outline_y"][:], {"units": "m"})
+            out[label] = ds
+        return out
+
+
+def open_store(path):
+    """Opens a store for reading (see the module's help)."""
+    return Store(path)

@@ -1,0 +1,58 @@
+#!/bin/bash
+# The viewers in the real viewer: ParaView (Debian's paraview package, pvpython) opens the
+# snapshot series of `campaign simulate --snapshots` (hopper.pvd) and a field map of
+# `campaign export --vtk` (.vti) natively; paraview_check.py checks the number of frames and
+# points, the radius range and the mean speed range against what hopper wrote, and renders both
+# to PNG files that are kept in WORK. Skipped (exit 77) without pvpython, or without a display
+# and xvfb-run (Debian's paraview renders through X).
+source "$SRC/tests/campaign/lib.sh"
+PVPYTHON=$(command -v pvpython) || { echo "SKIP: no pvpython (apt-get install paraview python3-paraview)"; exit 77; }
+RUNX=()
+if [ -z "${DISPLAY:-}" ]; then
+    command -v xvfb-run >/dev/null || { echo "SKIP: no display and no xvfb-run (apt-get install xvfb xauth)"; exit 77; }
+    RUNX=(xvfb-run -a -s "-screen 0 1024x768x24")
+fi
+"$PY" -c "import xarray" 2>/dev/null || { echo "SKIP: python3-xarray is missing"; exit 77; }
+
+# a snapshot series of one tiny realization
+run_expect 0 sim "$EXE" simulate "$SRC/campaigns/tiny.toml" --D 3.0 --theta 60 --seed 1 \
+    --snapshots "$WORK/frames" --snapshot-interval 0.2
+FRAMES=$(ls "$WORK"/frames/hopper.*.vtu | wc -l)
+[ "$FRAMES" -ge 3 ] || fail "only $FRAMES frames"
+POINTS=$(sed -n 6p "$WORK/frames/hopper.000000.dump")  # NUMBER OF ATOMS of the first frame
+read -r RMIN RMAX < <(awk 'NR > 11 { r = $9; if (min == "" || r < min) min = r; if (r > max) max = r }
+                           END { printf "%.17g %.17g\n", min, max }' "$WORK/frames/hopper.000000.dump")
+
+# a field map
+run_expect 0 run "$EXE" run "$DATA/mini_fields.toml" --store "$WORK/mf.h5" --progress-interval 0
+run_expect 0 export "$EXE" export "$WORK/mf.h5" --vtk "$WORK/vtk"
+LABEL="D_cm=2.6 theta_deg=60 material.mu=0.5"
+VTI="$WORK/vtk/fields_D_cm=2.6_theta_deg=60_material.mu=0.5.vti"
+read -r CELLS SMIN SMAX < <("$PY" - "$SRC" "$WORK/mf.h5" "$LABEL" <<'PYEOF'
+import sys
+sys.path.insert(0, sys.argv[1] + "/analysis")
+import numpy as np
+from hopper_store import open_store
+ds = open_store(sys.argv[2]).fields()[sys.argv[3]]
+v = ds["mean_speed"].values
+print(v.size, repr(float(np.nanmin(v))), repr(float(np.nanmax(v))))
+PYEOF
+)
+[ -n "$CELLS" ] || fail "could not read the field map with hopper_store"
+"${RUNX[@]}" "$PVPYTHON" "$SRC/tests/analysis/paraview_check.py" "$WORK/frames/hopper.pvd" \
+    "$FRAMES" "$POINTS" "$RMIN" "$RMAX" "$VTI" "$CELLS" "$SMIN" "$SMAX" "$WORK" \
+    >pv.out 2>pv.err || { cat pv.out pv.err >&2; fail "paraview_check.py"; }
+cat pv.out
+# the renders are real pictures: PNG files with more than a handful of colours
+"$PY" - "$WORK/snapshot_last_frame.png" "$WORK/field_mean_speed.png" <<'PYEOF' || fail "renders"
+import sys
+import matplotlib.image as im
+import numpy as np
+for p in sys.argv[1:]:
+    a = im.imread(p)
+    colours = len(np.unique(a.reshape(-1, a.shape[-1]).round(3), axis=0))
+    print(p, a.shape, colours, "colours")
+    if colours < 10:
+        sys.exit("%s has only %d colours" % (p, colours))
+PYEOF
+echo "paraview.sh: passed; renders kept in $WORK"

@@ -1,0 +1,103 @@
+#!/usr/bin/python3
+"""analysis/hopper_store.py against a real store (mini_fields.toml, run by store.sh): every table
+agrees with the raw datasets read with h5py and with the C++ analysis (/analysis/points), the
+settings come typed from the scene text, and the export writes the same rows.
+usage: test_hopper_store.py SOURCE_DIR STORE.h5 CSV_DIR"""
+import math
+import pathlib
+import sys
+
+import h5py
+import numpy as np
+import pandas as pd
+
+src, store_path, csv_dir = pathlib.Path(sys.argv[1]), sys.argv[2], pathlib.Path(sys.argv[3])
+sys.path.insert(0, str(src / "analysis"))
+from hopper_store import open_store  # noqa: E402
+
+failures = []
+
+
+def check(ok, what):
+    if not ok:
+        failures.append(what)
+        print("FAIL: " + what)
+
+
+f = h5py.File(store_path, "r")
+with open_store(store_path) as s:
+    p = s.points
+    # settings typed, from the scene text
+    check(p["material.mu"].dtype == np.float64 and (p["material.mu"] == 0.5).all(),
+          "material.mu is float 0.5: %s" % p["material.mu"].tolist())
+    check(p["particles.count"].dtype == np.int64 and (p["particles.count"] == 100).all(),
+          "particles.count is int 100")
+    check((p["integrator.scheme"] == "gear4").all(), "integrator.scheme is the string gear4")
+    check(np.allclose(p["hopper.outlet_m"] * 100, p["D_cm"]), "outlet_m = D_cm / 100")
+    check(np.allclose(np.degrees(p["hopper.theta_rad"]), p["theta_deg"]), "theta_rad = theta_deg")
+    check(list(p["label"]) == list(f["points/label"].asstr()[:]), "labels in /points order")
+    check(s.varied == ["hopper.outlet_m", "hopper.theta_rad"], "varied: %s" % s.varied)
+    check(list(s.groups()) == ["\u03b8 = 45\u00b0", "\u03b8 = 60\u00b0"],
+          "groups: %s" % list(s.groups()))
+
+    r = s.realizations
+    raw = f["realizations"]
+    check(len(r) == raw["point"].shape[0] == 12, "12 realizations, got %d" % len(r))
+    has_empty = raw["has_empty_time"][:].astype(bool)
+    check(np.array_equal(r["empty_time"].notna().to_numpy(), has_empty),
+          "empty_time is NaN exactly where has_empty_time is FALSE")
+    check(set(r["status"]) <= {"complete", "arrested", "time_limit", "failed"}, "status names")
+    check(np.array_equal(r["seed"].to_numpy(), raw["seed"][:]), "seeds")
+
+    sv = s.survival
+    lengths = sv.groupby("row").size().reindex(range(len(r)), fill_value=0).to_numpy()
+    check(np.array_equal(lengths, raw["survival_length"][:]), "intervals per realization")
+    check(set(sv["event"]) <= {0, 1} and sv["duration"].ge(0).all(), "event 0/1, duration >= 0")
+    a = s.analysis
+    for i in p.index:
+        one = sv[sv["point"] == i]
+        T, n = float(one["duration"].sum()), int(one["event"].sum())
+        check(math.isclose(T, a.at[i, "total_observed_time"], rel_tol=1e-12),
+              "point %d: total time %g vs analysis %g" % (i, T, a.at[i, "total_observed_time"]))
+        check(n == a.at[i, "n_jams"], "point %d: jams %d vs analysis %d" % (i, n, a.at[i, "n_jams"]))
+        if n:
+            check(math.isclose(T / n, a.at[i, "tau_mle"], rel_tol=1e-12), "point %d: tau" % i)
+        else:
+            check(math.isnan(a.at[i, "tau_mle"]), "point %d: tau NaN without jams" % i)
+    # every realization ends with a censored interval unless it was arrested
+    last = sv.groupby("row").tail(1)
+    arrested = r["status"].to_numpy()[last["row"].to_numpy()] == "arrested"
+    check((last["event"].to_numpy()[~arrested] == 0).all(), "last interval censored")
+
+    for name, family in (("events", "event"), ("curves", "curve"), ("jams", "jam"),
+                         ("exits", "exit")):
+        df = getattr(s, name)
+        check(len(df) == int(raw[family + "_length"][:].sum()), "%s: every value" % name)
+    check(int(s.jams.groupby("row").size().sum()) == int(raw["n_jams"][:].sum()), "jams = n_jams")
+    check(set(s.events["kind"]) >= {"opened"}, "event kinds by name")
+
+    fields = s.fields()
+    check(len(fields) == 6, "fields of 6 points, got %d" % len(fields))
+    label = p["label"][0]
+    ds = fields[label]
+    g = f["analysis/fields"][label.replace("/", "_")]
+    raw_speed, win = g["mean_speed"][:], g["windows"][:]
+    ours = ds["mean_speed"].values
+    check(ds["mean_speed"].dims == ("y", "x") and ours.shape == raw_speed.shape, "field shape")
+    check(np.array_equal(ours[win > 0], raw_speed[win > 0]) and np.isnan(ours[win == 0]).all(),
+          "mean_speed equal where windows > 0, NaN elsewhere")
+    check(math.isclose(float(ds.x[0]), float(g.attrs["x0"]) + 0.5 * float(g.attrs["cell"])),
+          "x is the cell centre")
+
+    # the export wrote the same rows
+    for name in ("points", "realizations", "survival", "events", "curves", "jams", "exits",
+                 "analysis", "beverloo", "jam_rate", "km", "fields"):
+        path = csv_dir / (name + ".csv")
+        check(path.exists(), "export wrote %s" % path.name)
+    if (csv_dir / "survival.csv").exists():
+        back = pd.read_csv(csv_dir / "survival.csv")
+        check(len(back) == len(sv) and np.allclose(back["duration"], sv["duration"], rtol=0,
+                                                   atol=1e-15), "survival.csv round trip")
+
+print("%d failures" % len(failures))
+sys.exit(1 if failures else 0)
