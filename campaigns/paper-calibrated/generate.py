@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Writes campaigns/paper-calibrated/*.toml from campaigns/paper/*.toml, and
-campaigns/calibration/targets-calibrated.toml from targets-spec.toml (issue 11).
+campaigns/calibration/{targets,beverloo}-calibrated.toml from their -spec twins (issue 11).
 
 usage: /usr/bin/python3 campaigns/paper-calibrated/generate.py
 
@@ -26,6 +26,8 @@ CALIBRATED = {
     ],
     "walls": [
         ("spacing", "0.5", "smooth walls: wall disks overlapping by half a diameter"),
+        ("particle_diameter_cm", "0.602",
+         "wall disks of d_small: the walls' lower ends are rounded with radius d_small / 2"),
     ],
 }
 
@@ -73,11 +75,12 @@ def main():
         with open(os.path.join(HERE, name), "w") as fh:
             fh.write(calibrate(text, name))
         print("wrote campaigns/paper-calibrated/" + name)
-    with open(os.path.join(CALIBRATION, "targets-spec.toml")) as fh:
-        text = fh.read()
-    with open(os.path.join(CALIBRATION, "targets-calibrated.toml"), "w") as fh:
-        fh.write(calibrate(text, "targets-spec.toml", "campaigns/calibration"))
-    print("wrote campaigns/calibration/targets-calibrated.toml")
+    for stem in ("targets", "beverloo"):
+        with open(os.path.join(CALIBRATION, stem + "-spec.toml")) as fh:
+            text = fh.read()
+        with open(os.path.join(CALIBRATION, stem + "-calibrated.toml"), "w") as fh:
+            fh.write(calibrate(text, stem + "-spec.toml", "campaigns/calibration"))
+        print("wrote campaigns/calibration/%s-calibrated.toml" % stem)
 
 
 if __name__ == "__main__":

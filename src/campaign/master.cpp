@@ -75,12 +75,22 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         std::chrono::duration<double>(progress ? options_.progress_interval : 1e9));
     auto next_progress = start + interval;
     int failed_now = totals.failed;
+    // ETA weighted by the cost model, corrected by the worker seconds measured so far. The cost
+    // model's expected_seconds assume a pessimistic 100 ns per particle-step; 0.5 of that is the
+    // prior until a realization has finished.
+    CostEta eta(channel_.workers(), 0.5);
+    bool costs_known = true;
+    for (const auto& t : todo) {
+        eta.add_pending(t.expected_seconds);
+        costs_known = costs_known && t.expected_seconds > 0;
+    }
 
     auto print_progress = [&] {
         const double elapsed = seconds_since(start);
         const double rate = elapsed > 0 ? report.stored / elapsed : 0.0;
         log_ << progress_line(totals.finished + report.stored, totals.total,
-                              static_cast<int>(busy.size()), failed_now, rate, elapsed)
+                              static_cast<int>(busy.size()), failed_now, rate, elapsed,
+                              costs_known ? eta.seconds_left() : -1.0)
              << std::endl;
     };
 
@@ -143,6 +153,7 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         finished[item.index] = 1;
         if (reassigned[item.index]) digest[item.index] = store::physics_digest(r);
         ++report.stored;
+        eta.finished(t.expected_seconds, m.seconds);
         if (r.status == engine::Status::failed) {
             ++report.failed;
             ++failed_now;

@@ -23,10 +23,13 @@ std::string format_duration(double s) {
 }
 
 std::string progress_line(int done, int total, int running, int failed, double rate,
-                          double elapsed) {
+                          double elapsed, double eta_seconds) {
     char buf[256];
     const int left = std::max(0, total - done);
-    const std::string eta = left == 0 ? "0s" : rate > 0 ? format_duration(left / rate) : "?";
+    const std::string eta = left == 0          ? "0s"
+                            : eta_seconds >= 0 ? format_duration(eta_seconds)
+                            : rate > 0         ? format_duration(left / rate)
+                                               : "?";
     std::snprintf(buf, sizeof buf,
                   "campaign: %d/%d done, %d running, %d failed, %.3g/s, ETA %s, elapsed %s", done,
                   total, running, failed, rate, eta.c_str(), format_duration(elapsed).c_str());

@@ -188,14 +188,18 @@ TEST(ShippedCampaigns, CalibratedTwinsDifferOnlyInTheCalibratedChoices) {
     const fs::path root = HOPPER_SOURCE_DIR;
     // The calibrated model, as it appears in a point's physics text.
     const std::map<std::string, std::string> calibrated = {
-        {"hopper.outlet_measure", "inner_envelope"}, {"hopper.wall_spacing", "0.5"}};
+        {"hopper.outlet_measure", "inner_envelope"},
+        {"hopper.wall_spacing", "0.5"},
+        {"hopper.wall_diameter_m", "0.00602"}};
     std::vector<std::pair<fs::path, fs::path>> pairs = {
         {root / "campaigns/calibration/targets-spec.toml",
-         root / "campaigns/calibration/targets-calibrated.toml"}};
+         root / "campaigns/calibration/targets-calibrated.toml"},
+        {root / "campaigns/calibration/beverloo-spec.toml",
+         root / "campaigns/calibration/beverloo-calibrated.toml"}};
     for (const auto& e : fs::directory_iterator(root / "campaigns/paper"))
         if (e.path().extension() == ".toml")
             pairs.emplace_back(e.path(), root / "campaigns/paper-calibrated" / e.path().filename());
-    ASSERT_EQ(pairs.size(), 9u);
+    ASSERT_EQ(pairs.size(), 10u);
     for (const auto& [spec_path, cal_path] : pairs) {
         SCOPED_TRACE(cal_path.string());
         ASSERT_TRUE(fs::exists(cal_path));
