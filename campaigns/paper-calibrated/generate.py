@@ -20,14 +20,10 @@ CALIBRATION = os.path.join(HERE, "..", "calibration")
 
 # section -> [(key, TOML value, why)]
 CALIBRATED = {
-    "hopper": [
-        ("outlet_measure", '"inner_envelope"',
-         "D between the funnel walls' faces (inner envelopes) at the outlet"),
-    ],
     "walls": [
         ("spacing", "0.5", "smooth walls: wall disks overlapping by half a diameter"),
-        ("particle_diameter_cm", "0.602",
-         "wall disks of d_small: the walls' lower ends are rounded with radius d_small / 2"),
+        ("edge_offset", "0.15",
+         "the walls' rounded lower ends sit 0.15 wall diameters up the wall from the outlet corner"),
     ],
 }
 

@@ -188,9 +188,7 @@ TEST(ShippedCampaigns, CalibratedTwinsDifferOnlyInTheCalibratedChoices) {
     const fs::path root = HOPPER_SOURCE_DIR;
     // The calibrated model, as it appears in a point's physics text.
     const std::map<std::string, std::string> calibrated = {
-        {"hopper.outlet_measure", "inner_envelope"},
-        {"hopper.wall_spacing", "0.5"},
-        {"hopper.wall_diameter_m", "0.00602"}};
+        {"hopper.wall_spacing", "0.5"}, {"hopper.edge_offset", "0.15"}};
     std::vector<std::pair<fs::path, fs::path>> pairs = {
         {root / "campaigns/calibration/targets-spec.toml",
          root / "campaigns/calibration/targets-calibrated.toml"},
