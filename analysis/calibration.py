@@ -13,9 +13,11 @@ sensitivity  a store of campaigns/calibration/sensitivity.toml: per wall angle, 
              deviation, and the empty-time change this implies (the hopper empties at a constant
              rate, so T_empty scales as 1/rate). Writes sensitivity.md and sensitivity.png.
 targets      stores of campaigns/calibration/targets-*.toml: each of the eleven published empty
-             times against the store's (ratio and relative error), one column per store.
+             times against the store's (ratio and relative error), one column per argument;
+             an argument A.h5+B.h5 joins stores that hold different points of one variant.
              Writes targets.md.
-beverloo     a store of a D scan at one wall angle (campaigns/calibration/beverloo-*.toml):
+beverloo     a store of a D scan at one wall angle (campaigns/calibration/beverloo-*.toml; A.h5+B.h5
+             joins stores holding different outlets):
              the discharge rate against D with the 2-D Beverloo fit W = A (D - k d)^(3/2)
              (d the mean diameter; A and k fitted by least squares). Writes beverloo.md, .png.
 
@@ -204,8 +206,24 @@ def target_key(s):
             round(num(s, "walls.e_n"), 6), round(num(s, "walls.mu"), 6))
 
 
+class Joined:
+    """Several stores of one variant (different points) seen as one."""
+
+    def __init__(self, spec):
+        self.parts = [Store(p) for p in spec.split("+")]
+        self.settings = [s for st in self.parts for s in st.settings]
+
+    def empty_times(self, key):
+        out = []
+        for st in self.parts:
+            for i, s in enumerate(st.settings):
+                if target_key(s) == key:
+                    out.append(st.values(st.empty, i))
+        return np.concatenate(out) if out else np.zeros(0)
+
+
 def targets(args):
-    stores = [Store(p) for p in args.stores]
+    stores = [Joined(p) for p in args.stores]
     header = "| theta | D (cm) | particles e_n, mu | walls e_n, mu | published (s) |"
     sep = "|---|---|---|---|---|"
     for p in args.stores:
@@ -218,8 +236,7 @@ def targets(args):
         th, D, en, mu, wen, wmu = key
         row = "| %g | %g | %g, %g | %g, %g | %.2f |" % (th, D, en, mu, wen, wmu, T)
         for k, st in enumerate(stores):
-            found = [i for i, s in enumerate(st.settings) if target_key(s) == key]
-            v = np.concatenate([st.values(st.empty, i) for i in found]) if found else np.zeros(0)
+            v = st.empty_times(key)
             if len(v) == 0:
                 row += " - | - | - |"
                 continue
@@ -242,25 +259,29 @@ def targets(args):
 def beverloo(args):
     from scipy.optimize import curve_fit
 
-    st = Store(args.store)
-    pts = sorted(range(len(st.labels)), key=lambda i: D_cm(st.settings[i]))
+    stores = [Store(p) for p in args.store.split("+")]
+    by_D = {}
+    for st in stores:
+        for i, s in enumerate(st.settings):
+            by_D.setdefault(D_cm(s), []).append(st.values(st.rate, i))
+    s0 = stores[0].settings[0]
     D, W, sW = [], [], []
-    for i in pts:
-        v = st.values(st.rate, i)
+    for x in sorted(by_D):
+        v = np.concatenate(by_D[x])
         if len(v) == 0:
             continue
-        D.append(D_cm(st.settings[i]))
         m, e, n = mean_err(v)
+        D.append(x)
         W.append(m)
         sW.append(e if n > 1 and np.isfinite(e) and e > 0 else np.nan)
     D, W, sW = np.array(D), np.array(W), np.array(sW)
     if len(D) < 3:
         fail("the Beverloo fit needs at least 3 outlets with a rate; the store has %d" % len(D))
-    s0 = st.settings[pts[0]]
     frac = num(s0, "particles.small_fraction")
     d_mean = 100 * (frac * num(s0, "particles.d_small_m") + (1 - frac) * num(s0, "particles.d_large_m"))
-    # Where seeds are missing, use the relative scatter of the others (or 1 %).
-    rel = np.nanmedian(sW / W) if np.any(np.isfinite(sW)) else 0.01
+    # Where seeds are missing, use the relative scatter of the others, or else the 2.5 % seed-to-
+    # seed scatter of the rate measured by the sensitivity study (docs/calibration.md).
+    rel = np.nanmedian(sW / W) if np.any(np.isfinite(sW)) else 0.025
     sW = np.where(np.isfinite(sW), sW, rel * W)
 
     def model(x, A, k):
