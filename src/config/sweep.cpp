@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -71,6 +72,15 @@ double num(const Value& v) {
     return std::get<double>(v);
 }
 
+// The option of a choice key whose engine name (to_string) the file gave. The parser has checked
+// the string against the key's list already, so the fallback is never taken.
+template <class E>
+E choice_of(const Value& v, std::initializer_list<E> options) {
+    for (const E e : options)
+        if (engine::to_string(e) == std::get<std::string>(v)) return e;
+    return *options.begin();
+}
+
 // ---------------------------------------------------------------------------------------------
 // The key table: every scene parameter a sweep file may set, its type, range (in file units)
 // and how it lands in SceneParams (SI). This is the single place that maps file keys to fields;
@@ -121,10 +131,8 @@ const std::array key_table = {
            [](P& p, V v) { p.particles.density = num(v); }},
     KeyDef{"hopper", "outlet_measure", "hopper.outlet_measure", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
-               const auto& s = std::get<std::string>(v);
-               p.hopper.outlet_measure = s == "centre_gap"       ? engine::OutletMeasure::centre_gap
-                                         : s == "inner_envelope" ? engine::OutletMeasure::inner_envelope
-                                                                 : engine::OutletMeasure::surface_gap;
+               using M = engine::OutletMeasure;
+               p.hopper.outlet_measure = choice_of(v, {M::surface_gap, M::centre_gap, M::inner_envelope});
            }, "surface_gap,centre_gap,inner_envelope"},
     // [material]: particle-particle contacts and stiffness
     KeyDef{"material", "e_n", "material.e_n", Kind::real, 0, 1, open, closed, "",
@@ -143,20 +151,17 @@ const std::array key_table = {
            [](P& p, V v) { p.material.gamma_t_over_gamma_n = num(v); }},
     KeyDef{"material", "slip_rule", "material.slip_rule", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
-               p.material.slip_rule = std::get<std::string>(v) == "spring_only"
-                                          ? engine::SlipRule::spring_only
-                                          : engine::SlipRule::spring_and_dashpot;
+               using R = engine::SlipRule;
+               p.material.slip_rule = choice_of(v, {R::spring_and_dashpot, R::spring_only});
            }, "spring_and_dashpot,spring_only"},
     KeyDef{"material", "lever_arm", "material.lever_arm", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
-               p.material.lever_arm = std::get<std::string>(v) == "contact" ? engine::LeverArm::contact
-                                                                           : engine::LeverArm::radius;
+               p.material.lever_arm = choice_of(v, {engine::LeverArm::radius, engine::LeverArm::contact});
            }, "radius,contact"},
     KeyDef{"material", "normal_damping", "material.normal_damping", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
-               p.material.normal_damping = std::get<std::string>(v) == "exact_restitution"
-                                               ? engine::NormalDamping::exact_restitution
-                                               : engine::NormalDamping::nominal;
+               using N = engine::NormalDamping;
+               p.material.normal_damping = choice_of(v, {N::nominal, N::exact_restitution});
            }, "nominal,exact_restitution"},
     // [walls]: particle-wall contacts and wall roughness
     KeyDef{"walls", "e_n", "walls.e_n", Kind::real, 0, 1, open, closed, "",
