@@ -112,6 +112,13 @@ void write_vtu(std::ostream& os, const engine::Snapshot& s, std::int64_t step) {
         for (std::size_t i = 0; i < nw; ++i)
             out += "0 ";
     });
+    // Sum of |F_n| over each particle's contacts (N); 0 where the snapshot carries none.
+    data_array(out, "Float64", "contact_force", 1, [&] {
+        for (std::size_t i = 0; i < nm; ++i)
+            number(out, i < s.contact_force.size() ? s.contact_force[i] : 0.0);
+        for (std::size_t i = 0; i < nw; ++i)
+            number(out, i < s.wall_contact_force.size() ? s.wall_contact_force[i] : 0.0);
+    });
     out += "      </PointData>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
     os << out;
 }

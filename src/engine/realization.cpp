@@ -246,8 +246,11 @@ struct Realization::Impl {
             v += sys->wall_offset().x();
         for (auto& v : wy)
             v += sys->wall_offset().y();
+        // Contact forces for viewers: read-only (the same evaluation the fields use).
+        std::vector<double> fn(std::size_t(sys->mobile_count())), wfn(wx.size());
+        sys->normal_force_sums(fn, wfn);
         hooks.on_snapshot({phase, sys->time(), td, sys->ids(), sys->x(), sys->y(), sys->vx(),
-                           sys->vy(), sys->w(), sys->r(), wx, wy, sys->wall_r()});
+                           sys->vy(), sys->w(), sys->r(), wx, wy, sys->wall_r(), fn, wfn});
     }
 
     bool stop_requested() const { return hooks.stop && hooks.stop->load(); }

@@ -26,12 +26,22 @@ UpdatePipeline(time=times[0], proxy=series)
 info = series.GetDataInformation()
 if info.GetNumberOfPoints() != int(points):
     bad.append("first frame: %d points, expected %d" % (info.GetNumberOfPoints(), int(points)))
-for name in ("id", "type", "radius", "velocity", "angular_velocity"):
+for name in ("id", "type", "radius", "velocity", "angular_velocity", "contact_force"):
     if name not in series.PointData.keys():
         bad.append("no point array '%s' (has %s)" % (name, series.PointData.keys()))
 lo, hi = series.PointData["radius"].GetRange()
 close(lo, float(r_min), "smallest radius")
 close(hi, float(r_max), "largest radius")
+if "contact_force" in series.PointData.keys():
+    # the first frame is the fill lattice (no contacts), the last an empty hopper; in between
+    # the packing has contacts
+    peak = 0.0
+    for t in times:
+        UpdatePipeline(time=t, proxy=series)
+        peak = max(peak, series.PointData["contact_force"].GetRange()[1])
+    if not peak > 0:
+        bad.append("contact_force is zero everywhere in every frame (a packing has contacts)")
+    UpdatePipeline(time=times[0], proxy=series)
 if series.PointData["velocity"].GetNumberOfComponents() != 3:
     bad.append("velocity is not a 3-vector")
 

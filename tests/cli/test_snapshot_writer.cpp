@@ -23,10 +23,11 @@ struct Fixture {
     std::vector<double> vx{0.5, 0.0, -0.25}, vy{-1.0, 0.125, 2.0}, w{3.0, 0.0, -1.5};
     std::vector<double> r{0.00301, 0.00385, 0.00301};
     std::vector<double> wx{-0.05, 0.05}, wy{0.0, 0.0}, wr{0.00385, 0.00385};
+    std::vector<double> fn{0.25, 0.0, 1.5}, wfn{0.75, 0.0};
 
     engine::Snapshot snapshot(double t) const {
         return engine::Snapshot{
-            engine::Phase::discharge, t, t - 1.0, id, x, y, vx, vy, w, r, wx, wy, wr};
+            engine::Phase::discharge, t, t - 1.0, id, x, y, vx, vy, w, r, wx, wy, wr, fn, wfn};
     }
 };
 
@@ -179,6 +180,10 @@ TEST(SnapshotWriter, WritesVtuFramesAndTheirSeries) {
     EXPECT_NE(vtu.find("12500"), std::string::npos);  // TIMESTEP
     // velocity of the second particle (0, 0.125, 0) and its omega
     EXPECT_NE(vtu.find("0.5 -1 0 0 0.125 0 -0.25 2 0 0 0 0 0 0 0"), std::string::npos) << vtu;
+    // contact forces: mobile particles, then walls
+    const auto cf = vtu.find("\"contact_force\"");
+    ASSERT_NE(cf, std::string::npos) << vtu;
+    EXPECT_NE(vtu.find("0.25 0 1.5 0.75 0", cf), std::string::npos) << vtu;
     const auto pvd = read_lines(dir / "hopper.pvd");
     std::string all;
     for (const auto& l : pvd)

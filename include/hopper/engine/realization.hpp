@@ -25,6 +25,9 @@ struct Snapshot {
     std::span<const int> id;
     std::span<const double> x, y, vx, vy, omega, radius;
     std::span<const double> wall_x, wall_y, wall_radius;  // current wall positions
+    // Sum of |F_n| over each particle's current contacts (N; System::normal_force_sums), per
+    // mobile particle and per wall particle.
+    std::span<const double> contact_force, wall_contact_force;
 };
 
 struct Progress {
