@@ -77,6 +77,7 @@ class Store:
         self.settings = [parse_scene(t) for t in f["points/scene"].asstr()[:]]
         r = f["realizations"]
         self.point = r["point"][:]
+        self.seed = r["seed"][:]
         self.rate = np.where(r["has_discharge_rate"][:].astype(bool), r["discharge_rate"][:],
                              np.nan)
         self.empty = np.where(r["has_empty_time"][:].astype(bool), r["empty_time"][:], np.nan)
@@ -260,14 +261,15 @@ def beverloo(args):
     from scipy.optimize import curve_fit
 
     stores = [Store(p) for p in args.store.split("+")]
-    by_D = {}
+    by_D = {}  # D -> {seed: rate}: a realization stored in two of the joined stores counts once
     for st in stores:
         for i, s in enumerate(st.settings):
-            by_D.setdefault(D_cm(s), []).append(st.values(st.rate, i))
+            rows = (st.point == i) & np.isfinite(st.rate)
+            by_D.setdefault(D_cm(s), {}).update(zip(st.seed[rows].tolist(), st.rate[rows]))
     s0 = stores[0].settings[0]
     D, W, sW = [], [], []
     for x in sorted(by_D):
-        v = np.concatenate(by_D[x])
+        v = np.array(list(by_D[x].values()))
         if len(v) == 0:
             continue
         m, e, n = mean_err(v)
