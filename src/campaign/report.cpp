@@ -22,8 +22,8 @@ std::string format_duration(double s) {
     return buf;
 }
 
-std::string progress_line(int done, int total, int running, int failed, double rate,
-                          double elapsed, double eta_seconds) {
+std::string progress_line(int done, int total, int running, int failed, double rate, double elapsed,
+                          double eta_seconds) {
     char buf[256];
     const int left = std::max(0, total - done);
     const std::string eta = left == 0          ? "0s"

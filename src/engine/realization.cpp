@@ -83,7 +83,7 @@ SystemConfig system_config(const SceneParams& p, const DerivedConstants& c) {
     // ratio is material.gamma_t_over_gamma_n, 0.5 by default)
     const double gt = p.material.gamma_t_over_gamma_n;
     const bool spring_only = p.material.slip_rule == SlipRule::spring_only;
-    sc.particle = {c.k_n, c.gamma_n_system, c.k_t, c.gamma_n_system * gt, p.material.system.mu,
+    sc.particle = {c.k_n,      c.gamma_n_system, c.k_t, c.gamma_n_system * gt, p.material.system.mu,
                    spring_only};
     sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall * gt, p.material.wall.mu, spring_only};
     sc.contact_lever = p.material.lever_arm == LeverArm::contact;
@@ -180,7 +180,8 @@ struct Realization::Impl {
         y_region = y_outlet - p.protocol.jam_region_height * p.particles.d_large;
         // Mean kinetic energy per particle can never exceed the potential energy of a fall from
         // the top of the walls to the removal floor (plus shaking); 100x that is a blow-up.
-        const double drop = layout.wall_top - y_outlet + p.protocol.exit_depth * p.particles.d_large;
+        const double drop =
+            layout.wall_top - y_outlet + p.protocol.exit_depth * p.particles.d_large;
         ke_limit = 100.0 * c.m_large * p.gravity * drop;
         wall_top = layout.wall_top;
         outline = layout.outline;

@@ -78,19 +78,10 @@ Vec2 edge_disk_centre(const HopperGeometry& g) {
 }
 
 double outlet_free_gap(const HopperGeometry& g) {
-    // 2 x_edge - d_edge, written as D plus corrections that vanish for the default geometry
-    // (so that it is exactly D there).
+    // 2 x_edge - d_edge, written as D plus the edge disk's shift from its default place
+    // (D/2 + d_edge/2, 0): that shift is exactly 0 for the default geometry, where this is D.
     const double d_edge = g.edge_diameter.value_or(g.wall_diameter);
-    const double rise = 2.0 * g.edge_offset * g.wall_diameter * (is_slot(g) ? 0.0 : std::cos(g.theta));
-    switch (g.outlet_measure) {
-        case OutletMeasure::surface_gap:
-            return g.outlet + rise;
-        case OutletMeasure::centre_gap:
-            return g.outlet - d_edge + rise;
-        case OutletMeasure::inner_envelope:
-            return g.outlet + 2.0 * (wall_line_crossing(g) - g.outlet / 2) - d_edge + rise;
-    }
-    return g.outlet + rise;
+    return g.outlet + 2.0 * (edge_disk_centre(g).x() - (g.outlet / 2 + d_edge / 2));
 }
 
 double inner_half_width(const HopperGeometry& g, double y) {
@@ -127,8 +118,7 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
     // Where the funnel's centre line reaches the side walls' centre line: (side_x - x0) tan
     // theta, written so that the default geometry (shift = 0) gives the same bits as always.
     const double shift = x0 - (g.outlet / 2 + dw / 2);
-    layout.funnel_height =
-        slot ? 1e300 : ((g.width - g.outlet) / 2 - shift) * std::tan(g.theta);
+    layout.funnel_height = slot ? 1e300 : ((g.width - g.outlet) / 2 - shift) * std::tan(g.theta);
 
     // Fill: a square lattice, row by row from the gate up. A site is allowed when a large disk
     // centred there keeps `gap` clear of every wall particle whatever its position on the wall's

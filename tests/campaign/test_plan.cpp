@@ -75,8 +75,8 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     for (const char* name : {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over",
                              "slip_rule", "lever_arm", "normal_damping", "fill_base"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
-    EXPECT_TRUE(changed(
-        [](auto& q) { q.hopper.outlet_measure = engine::OutletMeasure::inner_envelope; }));
+    EXPECT_TRUE(
+        changed([](auto& q) { q.hopper.outlet_measure = engine::OutletMeasure::inner_envelope; }));
     EXPECT_TRUE(changed([](auto& q) { q.hopper.edge_diameter = 0.006; }));
     EXPECT_TRUE(changed([](auto& q) { q.hopper.edge_offset = 0.5; }));
     EXPECT_TRUE(changed([](auto& q) { q.material.gamma_t_over_gamma_n = 0.25; }));
@@ -187,8 +187,8 @@ TEST(ShippedCampaigns, CalibratedTwinsDifferOnlyInTheCalibratedChoices) {
     namespace fs = std::filesystem;
     const fs::path root = HOPPER_SOURCE_DIR;
     // The calibrated model, as it appears in a point's physics text.
-    const std::map<std::string, std::string> calibrated = {
-        {"hopper.wall_spacing", "0.5"}, {"hopper.edge_offset", "0.15"}};
+    const std::map<std::string, std::string> calibrated = {{"hopper.wall_spacing", "0.5"},
+                                                           {"hopper.edge_offset", "0.15"}};
     std::vector<std::pair<fs::path, fs::path>> pairs = {
         {root / "campaigns/calibration/targets-spec.toml",
          root / "campaigns/calibration/targets-calibrated.toml"},

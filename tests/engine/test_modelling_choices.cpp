@@ -37,8 +37,8 @@ SceneLayout build(const SceneParams& p) {
 WallParticle right_edge(const SceneLayout& s) {
     WallParticle best{{0, 1e9}, 0};
     for (const auto& w : s.walls)
-        if (w.pos.x() > 0 && (w.pos.y() < best.pos.y() ||
-                              (w.pos.y() == best.pos.y() && w.pos.x() < best.pos.x())))
+        if (w.pos.x() > 0 &&
+            (w.pos.y() < best.pos.y() || (w.pos.y() == best.pos.y() && w.pos.x() < best.pos.x())))
             best = w;
     return best;
 }

@@ -14,8 +14,8 @@ std::string format_duration(double seconds);
 
 // "campaign: 12/40 done, 2 running, 1 failed, 0.21/s, ETA 2m13s, elapsed 57s"
 // `eta_seconds` < 0: the time left from the count of realizations and the rate.
-std::string progress_line(int done, int total, int running, int failed, double rate,
-                          double elapsed, double eta_seconds = -1.0);
+std::string progress_line(int done, int total, int running, int failed, double rate, double elapsed,
+                          double eta_seconds = -1.0);
 
 // The time left, weighted by the cost model: the pending tasks' expected costs (expected_cost in
 // plan.hpp: particle-steps) times the measured worker seconds per cost unit of the tasks finished
