@@ -373,8 +373,9 @@ std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> pay
         // dropped by the next run anyway) and say what it means.
         if (::ftruncate(fd_, static_cast<off_t>(at)) == 0) ::fdatasync(fd_);
         throw core::StoreError(std::string(e.what()) +
-                               "; this record was not written (every earlier one is safe): make "
-                               "room and run the same command again to resume");
+                               "; this record was not written, and what finished before it is safe "
+                               "in the journal: make room and run the same command again to "
+                               "resume");
     }
     size_ += rec.size();
     check_still_in_place();
