@@ -2,8 +2,13 @@
 // per-phase breakdown, peak memory, and what each thing the engine skips is worth.
 //
 //   bench_engine [--repeats R] [--steps K] [--particles N] [--full] [--skips] [--fields]
-//                [--csv FILE]
+//                [--csv FILE] [--scheme gear4|verlet] [--delta D] [--kernel PATH]
+//                [--paths] [--lammps RUN_SH [--core C]]
 //
+//   --kernel  force path: auto (default), reference, baseline, avx2, avx512 (same bits)
+//   --paths   every force path this CPU has, compared on one trajectory (CPU time per step)
+//   --lammps  side by side with LAMMPS: ../shared/reference/lammps-hopper/run.sh and this
+//             engine alternate on core C (default 0), R pairs per scene; prints the ratio table
 //   --full    also run the discharge to the end (the wall time of one whole realization)
 //   --skips   what each thing the engine skips is worth (whole mid-size realizations)
 //   --fields  the cost of the coarse-grained field observer (issue 7), whole mid-size
@@ -15,10 +20,13 @@
 //   discharge  D = 4.5 cm, theta = 60 deg, from the opening, 0.5 s of discharge per repeat.
 // Each figure is the median of R repeats; the machine is shared, so compare ratios measured in
 // the same run rather than absolute numbers across runs.
+#include <sched.h>
 #include <sys/resource.h>
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -45,14 +53,19 @@ double peak_rss_mib() {
     return ru.ru_maxrss / 1024.0;  // Linux: kilobytes
 }
 
+// Set from the command line (--scheme, --delta, --kernel).
+Scheme g_scheme = Scheme::gear4;
+double g_delta = 50.0;
+KernelPath g_kernel = KernelPath::automatic;
+
 SceneParams full_scene(int particles) {
     SceneParams p;
     p.particles.count = particles;
     p.hopper.outlet = 4.5 * cm;
     p.hopper.theta = 60.0 * deg;
     p.material.collision_time = 8.0e-4;
-    p.integrator.steps_per_collision = 50;
-    p.integrator.scheme = Scheme::gear4;
+    p.integrator.steps_per_collision = g_delta;
+    p.integrator.scheme = g_scheme;
     return p;
 }
 
@@ -163,9 +176,146 @@ int field_overhead(int repeats) {
 
 }  // namespace
 
+double thread_cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// --paths: the force paths compared on one trajectory (they give the same bits, so the scene is
+// the same for all): blocks of `steps` steps per path, taken in turn, `repeats` rounds; per path
+// the median over blocks of the per-step CPU time of the force phase... measured as whole steps
+// (thread CPU time, so that time the process waits for the core does not count).
+int compare_paths(Realization& run, int repeats, int steps, bool discharge) {
+    System& sys = run.system();
+    std::vector<KernelPath> paths{KernelPath::reference, KernelPath::baseline};
+    for (KernelPath p : {KernelPath::avx2, KernelPath::avx512}) {
+        try {
+            sys.set_kernel(p);
+            paths.push_back(p);
+        } catch (const std::exception&) {
+        }
+    }
+    std::vector<std::vector<double>> ns(paths.size());
+    if (discharge) run.open();
+    for (int r = 0; r < repeats; ++r)
+        for (std::size_t k = 0; k < paths.size(); ++k) {
+            sys.set_kernel(paths[k]);
+            const double n = sys.mobile_count();
+            const double t0 = thread_cpu_seconds();
+            if (discharge)
+                run.advance(steps * sys.dt());
+            else
+                sys.run(steps);
+            ns[k].push_back((thread_cpu_seconds() - t0) / (n * steps) * 1e9);
+        }
+    std::printf("%s: CPU ns per particle-step, median of %d blocks of %d steps per path\n",
+                discharge ? "discharge" : "settled column", repeats, steps);
+    for (std::size_t k = 0; k < paths.size(); ++k)
+        std::printf("  %-10s %7.1f  (x %.2f of reference)\n", to_string(paths[k]).c_str(),
+                    median(ns[k]), median(ns[k]) / median(ns[0]));
+    return 0;
+}
+
+// Runs LAMMPS's reference script (`run.sh SCENE STEPS`, CORE pinned) and returns its last line:
+// ns per mobile particle-step of its loop; NaN (with the reason on stderr) if it failed.
+double run_lammps(const std::string& script, const char* scene, int steps, int core) {
+    const std::string cmd = "CORE=" + std::to_string(core) + " bash '" + script + "' " + scene +
+                            " " + std::to_string(steps) + " 2>&1";
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return std::nan("");
+    std::string last, all;
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, pipe)) {
+        all += buf;
+        last = buf;
+    }
+    const int rc = pclose(pipe);
+    char* end = nullptr;
+    const double ns = std::strtod(last.c_str(), &end);
+    if (rc != 0 || end == last.c_str()) {
+        std::fprintf(stderr, "bench_engine: %s failed (exit %d):\n%s", cmd.c_str(), rc,
+                     all.c_str());
+        return std::nan("");
+    }
+    return ns;
+}
+
+// --lammps SCRIPT: hopper and LAMMPS side by side on one core (issue 12). The process pins itself
+// to CORE (--core, default 0) and passes the same core to run.sh; the runs alternate LAMMPS,
+// hopper, LAMMPS, hopper ... per scene, `repeats` pairs each, and the ratio is taken pair by pair
+// (wall clock for both: LAMMPS reports its loop's wall time). Scenes: the settled column (LAMMPS
+// `packed`, hopper `steps` steps with the gate closed) and the steady discharge (LAMMPS
+// `discharge` from its opened state, hopper 0.5 s windows from the opening).
+int side_by_side(const std::string& script, int particles, int repeats, int steps, int core,
+                 const RunHooks& hooks) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(core, &set);
+    if (sched_setaffinity(0, sizeof set, &set) != 0)
+        std::fprintf(stderr, "bench_engine: could not pin to core %d; running unpinned\n", core);
+    Realization run(full_scene(particles), 1, hooks);
+    System& sys = run.system();
+    std::printf("hopper: %s, delta %g, force path %s; LAMMPS: %s; core %d\n",
+                to_string(g_scheme).c_str(), g_delta, to_string(sys.kernel_path()).c_str(),
+                script.c_str(), core);
+    run.settle();
+    if (run.finished()) {
+        std::fprintf(stderr, "settling failed: %s\n", run.result().message.c_str());
+        return 1;
+    }
+    struct Scene {
+        const char* name;
+        const char* lammps;
+        int lammps_steps;
+        std::vector<double> lmp, ours, ratio;
+    };
+    Scene scenes[2] = {{"settled column", "packed", 5000, {}, {}, {}},
+                       {"steady discharge", "discharge", 15000, {}, {}, {}}};
+    for (int k = 0; k < 2; ++k) {
+        Scene& sc = scenes[k];
+        if (k == 1) run.open();
+        for (int r = 0; r < repeats; ++r) {
+            const double l = run_lammps(script, sc.lammps, sc.lammps_steps, core);
+            if (std::isnan(l)) return 1;
+            double ns;
+            if (k == 0) {
+                const double n = sys.mobile_count();
+                const auto t0 = Clock::now();
+                sys.run(steps);
+                ns = std::chrono::duration<double>(Clock::now() - t0).count() / (n * steps) * 1e9;
+            } else {
+                const double ps0 = run.result().diagnostics.particle_steps;
+                const auto t0 = Clock::now();
+                run.advance(0.5);
+                const double ps = run.result().diagnostics.particle_steps - ps0;
+                ns = std::chrono::duration<double>(Clock::now() - t0).count() / ps * 1e9;
+            }
+            sc.lmp.push_back(l);
+            sc.ours.push_back(ns);
+            sc.ratio.push_back(l / ns);
+            std::printf("  %-17s pair %d: LAMMPS %6.1f ns, hopper %6.1f ns, ratio %.2f\n", sc.name,
+                        r + 1, l, ns, l / ns);
+            std::fflush(stdout);
+        }
+    }
+    std::printf(
+        "\n| scene | LAMMPS (ns/particle-step) | hopper (%s, delta %g) | LAMMPS / hopper |\n",
+        to_string(g_scheme).c_str(), g_delta);
+    std::printf("|---|---|---|---|\n");
+    for (const Scene& sc : scenes)
+        std::printf("| %s | %.1f | %.1f | %.2fx |\n", sc.name, median(sc.lmp), median(sc.ours),
+                    median(sc.ratio));
+    std::printf("(medians of %d interleaved pairs; the ratio is the median of the pairs' ratios)\n",
+                repeats);
+    return 0;
+}
+
 int main(int argc, char** argv) {
     int repeats = 5, steps = 2000, particles = 8750;
-    bool skips = false, full_run = false, fields = false;
+    bool skips = false, full_run = false, fields = false, paths = false;
+    std::string lammps;
+    int core = 0;
     std::string csv;
     for (int a = 1; a < argc; ++a) {
         const std::string arg = argv[a];
@@ -190,23 +340,45 @@ int main(int argc, char** argv) {
             fields = true;
         else if (arg == "--csv")
             csv = next();
+        else if (arg == "--lammps")
+            lammps = next();
+        else if (arg == "--core")
+            core = std::stoi(next());
+        else if (arg == "--paths")
+            paths = true;
+        else if (arg == "--kernel")
+            g_kernel = parse_kernel_path(next());
+        else if (arg == "--scheme")
+            g_scheme = next() == "verlet" ? Scheme::verlet : Scheme::gear4;
+        else if (arg == "--delta")
+            g_delta = std::stod(next());
         else {
             std::fprintf(stderr,
                          "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
-                         "[--skips] [--fields] [--csv FILE]\n");
+                         "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] "
+                         "[--kernel auto|reference|baseline|avx2|avx512] [--paths] "
+                         "[--lammps RUN_SH [--core C]]\n");
             return 2;
         }
     }
 
     if (fields) return field_overhead(repeats);
+    if (!lammps.empty()) {
+        RunHooks hooks;
+        hooks.kernel = g_kernel;
+        return side_by_side(lammps, particles, repeats, steps, core, hooks);
+    }
 
     std::printf(
-        "hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = 50, "
-        "gear4; medians of %d repeats\n",
-        particles, repeats);
+        "hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = %g, "
+        "%s; medians of %d repeats\n",
+        particles, g_delta, to_string(g_scheme).c_str(), repeats);
     const double rss0 = peak_rss_mib();
-    Realization run(full_scene(particles), 1);
+    RunHooks hooks;
+    hooks.kernel = g_kernel;
+    Realization run(full_scene(particles), 1, hooks);
     System& sys = run.system();
+    std::printf("force kernel: %s\n", to_string(sys.kernel_path()).c_str());
     auto t0 = Clock::now();
     run.settle();
     const double settle_wall = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -217,6 +389,10 @@ int main(int argc, char** argv) {
     std::printf("fill + settle: %.2f s simulated, %.1f s wall, %lld steps\n",
                 run.result().diagnostics.settle_time, settle_wall,
                 (long long)run.result().diagnostics.settle_steps);
+    if (paths) {
+        compare_paths(run, repeats, steps, false);
+        return compare_paths(run, repeats, steps, true);
+    }
 
     std::printf("\n%-34s %8s %8s %8s %8s %8s\n", "scene (ns per particle-step)", "total", "forces",
                 "integr.", "neighb.", "other");

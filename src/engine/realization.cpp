@@ -71,8 +71,9 @@ std::int64_t every(double seconds, double dt) {
     return std::max<std::int64_t>(1, std::llround(seconds / dt));
 }
 
-SystemConfig system_config(const SceneParams& p, const DerivedConstants& c) {
+SystemConfig system_config(const SceneParams& p, const DerivedConstants& c, KernelPath kernel) {
     SystemConfig sc;
+    sc.kernel = kernel;
     sc.dt = c.dt;
     sc.scheme = p.integrator.scheme;
     sc.gravity = Vec2(0.0, -p.gravity);
@@ -87,6 +88,7 @@ SystemConfig system_config(const SceneParams& p, const DerivedConstants& c) {
                    spring_only};
     sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall * gt, p.material.wall.mu, spring_only};
     sc.contact_lever = p.material.lever_arm == LeverArm::contact;
+    sc.contact_corrections = p.integrator.contact_corrections;
     return sc;
 }
 
@@ -159,7 +161,7 @@ struct Realization::Impl {
         res.diagnostics.k_n = c.k_n;
         core::Rng rng(seed);
         const SceneLayout layout = build_scene(p, rng);
-        sys = std::make_unique<System>(system_config(p, c));
+        sys = std::make_unique<System>(system_config(p, c, hooks.kernel));
         for (const auto& w : layout.walls)
             sys->add_wall(w.pos, w.diameter);
         for (const auto& w : layout.gate)

@@ -8,7 +8,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "force_batch.hpp"
 #include "hopper/core/error.hpp"
+#include "pair_force.hpp"
 
 namespace hopper::engine {
 
@@ -131,6 +133,21 @@ double max_displacement2(std::size_t n, const double* __restrict x, const double
     return std::isfinite(sum) ? maxd2 : std::numeric_limits<double>::quiet_NaN();
 }
 
+// Corrections, gear4: mean = 0.5 (v + saved), written over saved.
+void mean_into(std::size_t n, const double* __restrict v, double* __restrict saved) {
+    for (std::size_t i = 0; i < n; ++i)
+        saved[i] = 0.5 * (v[i] + saved[i]);
+}
+
+// Corrections, verlet: out = v + dt/2 (force inv_mass + g).
+void extrapolate(std::size_t n, double dt, double g, const double* __restrict force,
+                 const double* __restrict inv_mass, const double* __restrict v,
+                 double* __restrict out) {
+    const double hdt = 0.5 * dt;
+    for (std::size_t i = 0; i < n; ++i)
+        out[i] = v[i] + hdt * (force[i] * inv_mass[i] + g);
+}
+
 }  // namespace
 
 // The kernel chosen at setup: one contact law and one integrator, so that the hot loops contain
@@ -148,15 +165,23 @@ struct System::Kernel {
     virtual void prime(System& s) = 0;
 };
 
-// Lever: the lever arm of a contact is R - x/2 (true) or R (false, the specification).
-template <class Law, Scheme S, bool Lever>
+template <class Law, Scheme S>
 struct KernelImpl final : System::Kernel {
     static constexpr bool rot = Law::has_tangential;
+    static constexpr bool hist = Law::has_history;
 
     double predict(System& s) override {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
+        const bool corr = s.config_.contact_corrections;
         if constexpr (S == Scheme::gear4) {
+            // Corrections: the springs grow with the mean of the last corrected velocity
+            // (saved here) and the predicted one.
+            if (corr && hist) {
+                s.avx_ = s.vx_;
+                s.avy_ = s.vy_;
+                s.aw_ = s.w_;
+            }
             gear_predict_axis(n, dt, s.x_.data(), s.vx_.data(), s.x2_.data(), s.x3_.data(),
                               s.x4_.data());
             gear_predict_axis(n, dt, s.y_.data(), s.vy_.data(), s.y2_.data(), s.y3_.data(),
@@ -174,6 +199,11 @@ struct KernelImpl final : System::Kernel {
                     w3[i] += 4.0 * w4[i];
                 }
             }
+            if (corr && hist) {
+                mean_into(n, s.vx_.data(), s.avx_.data());
+                mean_into(n, s.vy_.data(), s.avy_.data());
+                mean_into(n, s.w_.data(), s.aw_.data());
+            }
         } else {
             // Velocity Verlet: half kick with the last forces, then drift.
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
@@ -181,6 +211,18 @@ struct KernelImpl final : System::Kernel {
             verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data());
             if constexpr (rot)
                 verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr);
+            // Corrections: the dashpots see the velocity extrapolated to the end of the step
+            // with the last forces, v + dt/2 (F/m + g).
+            if (corr) {
+                s.avx_.resize(n);
+                s.avy_.resize(n);
+                s.aw_.resize(n);
+                extrapolate(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.avx_.data());
+                extrapolate(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.avy_.data());
+                if constexpr (rot)
+                    extrapolate(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(),
+                                s.aw_.data());
+            }
         }
         return max_displacement2(n, s.x_.data(), s.y_.data(), s.xref_.data(), s.yref_.data());
     }
@@ -222,147 +264,137 @@ struct KernelImpl final : System::Kernel {
         }
     }
 
-    // One touching contact seen from particle i: separation (dx, dy) = r_i - r_j with
-    // d2 = |r_ij|^2 < rs^2 (the caller tests that first, so that partners out of reach cost a
-    // distance only), the sum of inverse masses (a wall's is 0, so mbar = m_i against a wall),
-    // the spring (hx, hy). Gives the force on i and c = n x F_t, from which both torques
-    // follow (-R c for i and for j).
-    struct Touch {
-        Vec2 F;
-        double c;
-        double overlap;
-        double li, lj;  // lever arms of i and j (the radii unless Lever)
-    };
-    HOPPER_HOT_INLINE static void touch(const ContactParams& p, double dt, double dx, double dy,
-                                        double d2, double rs, double inv_m_sum, const Vec2& vi,
-                                        const Vec2& vj, double ri, double wi, double rj, double wj,
-                                        double& hx, double& hy, Touch& t) {
-        const double d = std::sqrt(d2);
-        const double inv_d = 1.0 / d;
-        const Vec2 nrm(dx * inv_d, dy * inv_d);
-        t.overlap = rs - d;
-        t.li = Lever ? ri - 0.5 * t.overlap : ri;
-        t.lj = Lever ? rj - 0.5 * t.overlap : rj;
-        const double mbar = 1.0 / inv_m_sum;  // m_i m_j / (m_i + m_j)
-        const Vec2 vij = rot ? contact_velocity(vi, vj, t.li, wi, t.lj, wj, nrm) : Vec2(vi - vj);
-        Vec2 spring = Law::has_history ? Vec2(hx, hy) : Vec2::Zero();
-        const ContactForce cf = Law::evaluate(p, mbar, nrm, t.overlap, vij, spring, dt);
-        if constexpr (Law::has_history) {
-            hx = spring.x();
-            hy = spring.y();
-        }
-        t.F = cf.normal + cf.tangential;
-        t.c = rot ? core::cross(nrm, cf.tangential) : 0.0;
+    // The velocity sets of the force pass: without corrections the particles' velocities for
+    // both; with them, verlet's dashpots use the extrapolated set and gear4's springs the mean.
+    void velocity_sets(System& s, detail::ForceArgs& a, bool& two) const {
+        const bool corr = s.config_.contact_corrections;
+        const bool verlet_corr = corr && S == Scheme::verlet;
+        a.vx = verlet_corr ? s.avx_.data() : s.vx_.data();
+        a.vy = verlet_corr ? s.avy_.data() : s.vy_.data();
+        a.w = verlet_corr ? s.aw_.data() : s.w_.data();
+        two = corr && hist;
+        const bool gear_corr = two && S == Scheme::gear4;
+        a.svx = two ? (gear_corr ? s.avx_.data() : s.vx_.data()) : a.vx;
+        a.svy = two ? (gear_corr ? s.avy_.data() : s.vy_.data()) : a.vy;
+        a.sw = two ? (gear_corr ? s.aw_.data() : s.w_.data()) : a.w;
     }
 
     double forces(System& s) override {
-        const std::size_t n = s.x_.size();
-        const double dt = s.config_.dt;
-        const double* x = s.x_.data();
-        const double* y = s.y_.data();
-        const double* vx = s.vx_.data();
-        const double* vy = s.vy_.data();
-        const double* w = s.w_.data();
-        const double* r = s.r_.data();
-        const double* im = s.inv_m_.data();
-        double* fx = s.fx_.data();
-        double* fy = s.fy_.data();
-        double* tq = s.tq_.data();
-        std::fill(s.fx_.begin(), s.fx_.end(), 0.0);
-        std::fill(s.fy_.begin(), s.fy_.end(), 0.0);
-        if constexpr (rot) std::fill(s.tq_.begin(), s.tq_.end(), 0.0);
-        double* hx = s.pxi_x_.data();
-        double* hy = s.pxi_y_.data();
-        double* gx = s.wxi_x_.data();
-        double* gy = s.wxi_y_.data();
+        detail::ForceArgs a = s.force_args();
+        bool two = false;
+        velocity_sets(s, a, two);
+        detail::ForceSums sums;
+        if (s.kernel_path_ == KernelPath::reference) {
+            sums = two ? reference<true>(a) : reference<false>(a);
+        } else {
+            constexpr int law = !Law::has_tangential ? 0 : (!Law::has_history ? 1 : 2);
+            sums = detail::force_table(s.kernel_path_).fn[law][two ? 1 : 0](a);
+        }
+        s.wall_force_ = Vec2(sums.wall_fx, sums.wall_fy);
+        s.contacts_ = sums.contacts;
+        return sums.max_overlap;
+    }
+
+    // The reference force pass: one loop over the neighbour list, each touching pair evaluated
+    // where it is found. The batched paths must give exactly its bits (test_kernel_paths).
+    template <bool Corr>
+    static detail::ForceSums reference(const detail::ForceArgs& a) {
+        using detail::PairInput;
+        using detail::PairOutput;
+        std::fill(a.fx, a.fx + a.n, 0.0);
+        std::fill(a.fy, a.fy + a.n, 0.0);
+        if constexpr (rot) std::fill(a.tq, a.tq + a.n, 0.0);
         double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
-        const int* ps = s.pstart_.data();
-        const int* pj = s.pj_.data();
-        const int* ws = s.wstart_.data();
-        const int* wj = s.wj_.data();
-        const double* wx = s.wx_.data();
-        const double* wy = s.wy_.data();
-        const double* wr = s.wr_.data();
-        const ContactParams pp = s.config_.particle, pw = s.config_.wall;
-        const double ox = s.wall_offset_.x(), oy = s.wall_offset_.y();
-        const Vec2 vw = s.wall_velocity_;
         double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
         int contacts = 0;
-        Touch t;
-
-        for (std::size_t i = 0; i < n; ++i) {
-            const double xi = x[i], yi = y[i], ri = r[i], imi = im[i];
-            const Vec2 vi(vx[i], vy[i]);
-            const double wi = rot ? w[i] : 0.0;
+        PairInput q{};
+        for (int i = 0; i < a.n; ++i) {
+            const double xi = a.x[i], yi = a.y[i], ri = a.r[i];
+            q.vix = a.vx[i];
+            q.viy = a.vy[i];
+            q.wi = rot ? a.w[i] : 0.0;
+            q.six = a.svx[i];
+            q.siy = a.svy[i];
+            q.swi = rot ? a.sw[i] : 0.0;
+            q.ri = ri;
             double fxi = 0.0, fyi = 0.0, tqi = 0.0;
             // Mobile partners: each pair once, Newton's third law.
-            for (int k = ps[i]; k < ps[i + 1]; ++k) {
-                const int j = pj[k];
-                double& sx = Law::has_history ? hx[k] : no_spring_x;
-                double& sy = Law::has_history ? hy[k] : no_spring_y;
-                const double dx = xi - x[j], dy = yi - y[j], rs = ri + r[j];
-                const double d2 = dx * dx + dy * dy;
-                if (d2 >= rs * rs) {
+            for (int k = a.ps[i]; k < a.ps[i + 1]; ++k) {
+                const int j = a.pj[k];
+                double& sx = hist ? a.hx[k] : no_spring_x;
+                double& sy = hist ? a.hy[k] : no_spring_y;
+                q.dx = xi - a.x[j];
+                q.dy = yi - a.y[j];
+                q.rj = a.r[j];
+                q.rs = ri + q.rj;
+                q.d2 = q.dx * q.dx + q.dy * q.dy;
+                if (q.d2 >= q.rs * q.rs) {
                     sx = sy = 0.0;  // not touching: the spring is forgotten
                     continue;
                 }
-                touch(pp, dt, dx, dy, d2, rs, imi + im[j], vi, Vec2(vx[j], vy[j]), ri, wi, r[j],
-                      rot ? w[j] : 0.0, sx, sy, t);
-                fxi += t.F.x();
-                fyi += t.F.y();
-                fx[j] -= t.F.x();
-                fy[j] -= t.F.y();
+                q.mbar = a.pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
+                q.vjx = a.vx[j];
+                q.vjy = a.vy[j];
+                q.wj = rot ? a.w[j] : 0.0;
+                q.sjx = a.svx[j];
+                q.sjy = a.svy[j];
+                q.swj = rot ? a.sw[j] : 0.0;
+                const PairOutput o =
+                    detail::pair_force<Law, Corr, false>(a.pp, a.dt, a.lever_half, q, sx, sy);
+                fxi += o.fx;
+                fyi += o.fy;
+                a.fx[j] -= o.fx;
+                a.fy[j] -= o.fy;
                 if constexpr (rot) {
-                    tqi -= t.li * t.c;    // -R_i (n x F_t)
-                    tq[j] -= t.lj * t.c;  // -R_j (n x F_t): the same form for the partner
+                    tqi -= o.ti;      // -l_i (n x F_t)
+                    a.tq[j] -= o.tj;  // -l_j (n x F_t): the same form for the partner
                 }
-                max_ov = std::max(max_ov, t.overlap);
+                max_ov = std::max(max_ov, o.overlap);
                 ++contacts;
             }
             // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0.
             double wfxi = 0.0, wfyi = 0.0;
-            for (int k = ws[i]; k < ws[i + 1]; ++k) {
-                const int j = wj[k];
-                double& sx = Law::has_history ? gx[k] : no_spring_x;
-                double& sy = Law::has_history ? gy[k] : no_spring_y;
-                const double dx = xi - (wx[j] + ox), dy = yi - (wy[j] + oy), rs = ri + wr[j];
-                const double d2 = dx * dx + dy * dy;
-                if (d2 >= rs * rs) {
+            q.vjx = q.sjx = a.vwx;
+            q.vjy = q.sjy = a.vwy;
+            q.wj = q.swj = 0.0;
+            for (int k = a.ws[i]; k < a.ws[i + 1]; ++k) {
+                const int j = a.wj[k];
+                double& sx = hist ? a.gx[k] : no_spring_x;
+                double& sy = hist ? a.gy[k] : no_spring_y;
+                q.dx = xi - (a.wx[j] + a.ox);
+                q.dy = yi - (a.wy[j] + a.oy);
+                q.rj = a.wr[j];
+                q.rs = ri + q.rj;
+                q.d2 = q.dx * q.dx + q.dy * q.dy;
+                if (q.d2 >= q.rs * q.rs) {
                     sx = sy = 0.0;
                     continue;
                 }
-                touch(pw, dt, dx, dy, d2, rs, imi, vi, vw, ri, wi, wr[j], 0.0, sx, sy, t);
-                wfxi += t.F.x();
-                wfyi += t.F.y();
-                if constexpr (rot) tqi -= t.li * t.c;
-                max_ov = std::max(max_ov, t.overlap);
+                q.mbar = a.wmbar[k];
+                const PairOutput o =
+                    detail::pair_force<Law, Corr, false>(a.pw, a.dt, a.lever_half, q, sx, sy);
+                wfxi += o.fx;
+                wfyi += o.fy;
+                if constexpr (rot) tqi -= o.ti;
+                max_ov = std::max(max_ov, o.overlap);
                 ++contacts;
             }
-            fx[i] += fxi + wfxi;
-            fy[i] += fyi + wfyi;
+            a.fx[i] += fxi + wfxi;
+            a.fy[i] += fyi + wfyi;
             wfx -= wfxi;
             wfy -= wfyi;
-            if constexpr (rot) tq[i] += tqi;
+            if constexpr (rot) a.tq[i] += tqi;
         }
-        s.wall_force_ = Vec2(wfx, wfy);
-        s.contacts_ = contacts;
-        return max_ov;
+        return {max_ov, wfx, wfy, contacts};
     }
 };
 
 namespace {
 
-template <class Law, bool Lever>
-std::unique_ptr<System::Kernel> make_kernel_with(Scheme scheme) {
-    if (scheme == Scheme::gear4) return std::make_unique<KernelImpl<Law, Scheme::gear4, Lever>>();
-    return std::make_unique<KernelImpl<Law, Scheme::verlet, Lever>>();
-}
-
 template <class Law>
-std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme, bool contact_lever) {
-    // Without tangential forces there is no torque, and the lever arm plays no part.
-    if (contact_lever && Law::has_tangential) return make_kernel_with<Law, true>(scheme);
-    return make_kernel_with<Law, false>(scheme);
+std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme) {
+    if (scheme == Scheme::gear4) return std::make_unique<KernelImpl<Law, Scheme::gear4>>();
+    return std::make_unique<KernelImpl<Law, Scheme::verlet>>();
 }
 
 }  // namespace
@@ -385,14 +417,20 @@ System::System(const SystemConfig& config) : config_(config) {
     // integrated at all; k_t = 0 needs no spring history.
     history_ = friction && spring;
     if (!friction)
-        kernel_ = make_kernel_for<FrictionlessLaw>(config_.scheme, config_.contact_lever);
+        kernel_ = make_kernel_for<FrictionlessLaw>(config_.scheme);
     else if (!spring)
-        kernel_ = make_kernel_for<ViscousFrictionLaw>(config_.scheme, config_.contact_lever);
+        kernel_ = make_kernel_for<ViscousFrictionLaw>(config_.scheme);
     else
-        kernel_ = make_kernel_for<SpringFrictionLaw>(config_.scheme, config_.contact_lever);
+        kernel_ = make_kernel_for<SpringFrictionLaw>(config_.scheme);
+    kernel_path_ = config_.kernel == KernelPath::reference ? KernelPath::reference
+                                                           : detail::resolve_kernel(config_.kernel);
 }
 
 System::~System() = default;
+
+void System::set_kernel(KernelPath p) {
+    kernel_path_ = p == KernelPath::reference ? p : detail::resolve_kernel(p);
+}
 
 int System::add_particle(const Vec2& pos, double diameter, double mass, double inertia,
                          const Vec2& vel, double omega) {
@@ -484,6 +522,12 @@ void System::ensure_ready() {
     for (auto* col : {&x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
         col->clear();
     rebuild();
+    // The second velocity set (contact corrections) starts as the velocities themselves.
+    if (config_.contact_corrections) {
+        avx_ = vx_;
+        avy_ = vy_;
+        aw_ = w_;
+    }
     // The priming evaluation only provides accelerations: it must not advance the springs
     // (the first real step grows them by v_t dt), so they are put back afterwards.
     const std::vector<double> px = pxi_x_, py = pxi_y_, wxs = wxi_x_, wys = wxi_y_;
@@ -545,6 +589,62 @@ void System::fail_nonfinite() const {
     throw core::SimulationError(msg.str());
 }
 
+detail::ForceArgs System::force_args() {
+    detail::ForceArgs a;
+    a.n = int(x_.size());
+    a.x = x_.data();
+    a.y = y_.data();
+    a.r = r_.data();
+    a.im = inv_m_.data();
+    a.vx = a.svx = vx_.data();
+    a.vy = a.svy = vy_.data();
+    a.w = a.sw = w_.data();
+    a.fx = fx_.data();
+    a.fy = fy_.data();
+    a.tq = tq_.data();
+    a.ps = pstart_.data();
+    a.pj = pj_.data();
+    a.ws = wstart_.data();
+    a.wj = wj_.data();
+    a.hx = history_ ? pxi_x_.data() : nullptr;
+    a.hy = history_ ? pxi_y_.data() : nullptr;
+    a.gx = history_ ? wxi_x_.data() : nullptr;
+    a.gy = history_ ? wxi_y_.data() : nullptr;
+    a.wx = wx_.data();
+    a.wy = wy_.data();
+    a.wr = wr_.data();
+    a.ox = wall_offset_.x();
+    a.oy = wall_offset_.y();
+    a.vwx = wall_velocity_.x();
+    a.vwy = wall_velocity_.y();
+    a.pp = config_.particle;
+    a.pw = config_.wall;
+    a.dt = config_.dt;
+    a.lever_half = config_.contact_lever ? 0.5 : 0.0;
+    a.pmbar = pmbar_.data();
+    a.wmbar = wmbar_.data();
+    if (kernel_path_ != KernelPath::reference) {
+        // Packed-pair scratch: 3 int and 14 double columns, mobile pairs then wall pairs.
+        const std::size_t np = pj_.size(), nw = wj_.size(), len = np + nw;
+        if (pack_i_.size() < 3 * len) pack_i_.resize(3 * len);
+        if (pack_d_.size() < 14 * len) pack_d_.resize(14 * len);
+        auto carve = [&](detail::ForceArgs::Packed& pk, std::size_t off) {
+            std::int64_t* ib = pack_i_.data();
+            double* db = pack_d_.data();
+            pk.own = ib + off;
+            pk.partner = ib + len + off;
+            pk.entry = ib + 2 * len + off;
+            double** cols[] = {&pk.dx, &pk.dy, &pk.d2, &pk.rs, &pk.ri, &pk.rj, &pk.mbar,
+                               &pk.fx, &pk.fy, &pk.ti, &pk.tj, &pk.sx, &pk.sy, &pk.ov};
+            for (std::size_t c = 0; c < 14; ++c)
+                *cols[c] = db + c * len + off;
+        };
+        carve(a.mob, 0);
+        carve(a.wall, np);
+    }
+    return a;
+}
+
 // ----- neighbour list ------------------------------------------------------------------------
 
 void System::rebuild() {
@@ -580,8 +680,8 @@ void System::remove_below_floor() {
             keep.push_back(int(i));
     }
     if (keep.size() == y_.size()) return;
-    for (auto* col : {&x_,     &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_, &inv_m_,
-                      &inv_I_, &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+    for (auto* col : {&x_,  &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_,   &inv_m_, &inv_I_,
+                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_, &avx_, &avy_,   &aw_})
         compact(*col, keep);
     compact(id_, keep);
 }
@@ -654,8 +754,8 @@ void System::permute_by_cell(double cutoff) {
     const int ncell = grid_nx_ * grid_ny_;
     // Counting sort: order_[new index] = old index.
     bin_points(x_, y_, x0, y0, cs, grid_nx_, grid_ny_, cell_start_, order_, cell_of_);
-    for (auto* col : {&x_,     &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_, &inv_m_,
-                      &inv_I_, &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+    for (auto* col : {&x_,  &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_,   &inv_m_, &inv_I_,
+                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_, &avx_, &avy_,   &aw_})
         permute(*col, order_, scratch_);
     permute(id_, order_, iscratch_);
     // cell_of_ in the new order is non-decreasing; rebuild it from the starts.
@@ -718,6 +818,14 @@ void System::build_pairs() {
         }
     }
     wstart_[n] = int(wj_.size());
+    pmbar_.resize(pj_.size());
+    wmbar_.resize(wj_.size());
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k)
+            pmbar_[k] = 1.0 / (inv_m_[i] + inv_m_[pj_[k]]);
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k)
+            wmbar_[k] = 1.0 / inv_m_[i];
+    }
 }
 
 // Contact springs survive rebuilds keyed by the persistent ids of the pair: saved grouped by

@@ -50,11 +50,36 @@ HOPPER_HOT_INLINE Vec2 normal_force(const ContactParams& p, double mbar, const V
     return normal_magnitude(p, mbar, overlap, v_n) * n;
 }
 
+// One contact in components, for the force loops (system.cpp, force_batch.hpp). The laws are
+// written once, here, on plain doubles: every path (the reference loop and the batched scalar,
+// AVX2 and AVX-512 ones) evaluates the same operations in the same order, so all give the same
+// bits. Select = true evaluates both sides of the Coulomb cap and picks (no branch: SIMD
+// batches); false branches (scalar loops, where sliding contacts are few). The Vec2 form below
+// wraps it.
+struct ContactInput {
+    double nx, ny;     // unit normal, from j to i
+    double overlap;    // x > 0
+    double mbar;       // m_i m_j / (m_i + m_j)
+    double vx, vy;     // relative contact velocity for the dashpots and the Coulomb cap
+    double sx, sy;     // relative contact velocity that grows the spring (= v unless corrected)
+    double dt_spring;  // time over which the spring grows this step (dt, or less at onset)
+};
+struct ContactOutput {
+    double fn;        // signed normal magnitude: the normal force is fn n
+    double ftx, fty;  // tangential force
+};
+
 // Frictionless contacts (mu = 0 everywhere): no tangential force, hence no torque and no
 // rotation to integrate.
 struct FrictionlessLaw {
     static constexpr bool has_tangential = false;
     static constexpr bool has_history = false;
+    template <bool Select = false>
+    HOPPER_HOT_INLINE static ContactOutput evaluate(const ContactParams& p, const ContactInput& c,
+                                                    double& /*hx*/, double& /*hy*/) {
+        const double v_n = c.vx * c.nx + c.vy * c.ny;
+        return {normal_magnitude(p, c.mbar, c.overlap, v_n), 0.0, 0.0};
+    }
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
                                                    const Vec2& n, double overlap, const Vec2& v_ij,
                                                    Vec2& /*xi*/, double /*dt*/) {
@@ -67,18 +92,27 @@ struct FrictionlessLaw {
 struct ViscousFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = false;
+    template <bool Select = false>
+    HOPPER_HOT_INLINE static ContactOutput evaluate(const ContactParams& p, const ContactInput& c,
+                                                    double& /*hx*/, double& /*hy*/) {
+        const double v_n = c.vx * c.nx + c.vy * c.ny;
+        const double fn = normal_magnitude(p, c.mbar, c.overlap, v_n);
+        const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
+        const double g = -p.gamma_t * c.mbar;
+        double ftx = g * vtx, fty = g * vty;
+        const double cap = p.mu * std::abs(fn);  // mu |F_n|
+        const double ft2 = ftx * ftx + fty * fty;
+        const bool slip = ft2 > cap * cap;
+        if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
+            const double scale = cap / std::sqrt(ft2);  // used only where ft2 > cap^2 >= 0
+            ftx = slip ? ftx * scale : ftx;
+            fty = slip ? fty * scale : fty;
+        }
+        return {fn, ftx, fty};
+    }
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
                                                    const Vec2& n, double overlap, const Vec2& v_ij,
-                                                   Vec2& /*xi*/, double /*dt*/) {
-        const double v_n = v_ij.dot(n);
-        const double fn = normal_magnitude(p, mbar, overlap, v_n);
-        const Vec2 v_t = v_ij - v_n * n;
-        Vec2 F_t = -p.gamma_t * mbar * v_t;
-        const double cap = p.mu * std::abs(fn);  // mu |F_n|
-        const double ft2 = F_t.squaredNorm();
-        if (ft2 > cap * cap) F_t *= cap / std::sqrt(ft2);  // ft2 > cap^2 >= 0, so ft2 > 0
-        return {fn * n, F_t};
-    }
+                                                   Vec2& /*xi*/, double dt);
 };
 
 // Cundall-Strack static friction: a tangential spring xi that starts at zero length when the
@@ -87,28 +121,70 @@ struct ViscousFrictionLaw {
 struct SpringFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
+    template <bool Select = false>
+    HOPPER_HOT_INLINE static ContactOutput evaluate(const ContactParams& p, const ContactInput& c,
+                                                    double& hx, double& hy) {
+        const double v_n = c.vx * c.nx + c.vy * c.ny;
+        const double fn = normal_magnitude(p, c.mbar, c.overlap, v_n);
+        const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
+        // The spring's own tangential velocity (equal to v_t unless corrected).
+        const double s_n = c.sx * c.nx + c.sy * c.ny;
+        const double stx = c.sx - s_n * c.nx, sty = c.sy - s_n * c.ny;
+        // xi' = xi - n (n . xi), then grow by v_t dt
+        const double n_xi = c.nx * hx + c.ny * hy;
+        double xx = (hx - c.nx * n_xi) + stx * c.dt_spring;
+        double xy = (hy - c.ny * n_xi) + sty * c.dt_spring;
+        // F_t* = -k_t xi' - gamma_t mbar v_t
+        const double gm = p.gamma_t * c.mbar;
+        const double dx = gm * vtx, dy = gm * vty;
+        const double mk = -p.k_t;
+        double ftx = mk * xx - dx, fty = mk * xy - dy;
+        const double cap = p.mu * std::abs(fn);  // mu |F_n|
+        const double ft2 = ftx * ftx + fty * fty;
+        // Sliding: F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
+        // xi' = -(F_t + gamma_t mbar v_t) / k_t (spring_only: xi' = -F_t / k_t).
+        const bool slip = ft2 > cap * cap;
+        if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
+            const double scale = cap / std::sqrt(ft2);
+            const double sfx = ftx * scale, sfy = fty * scale;
+            const double rx = p.slip_spring_only ? -sfx : -(sfx + dx);
+            const double ry = p.slip_spring_only ? -sfy : -(sfy + dy);
+            xx = slip ? rx / p.k_t : xx;
+            xy = slip ? ry / p.k_t : xy;
+            ftx = slip ? sfx : ftx;
+            fty = slip ? sfy : fty;
+        }
+        hx = xx;
+        hy = xy;
+        return {fn, ftx, fty};
+    }
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
                                                    const Vec2& n, double overlap, const Vec2& v_ij,
-                                                   Vec2& xi, double dt) {
-        const double v_n = v_ij.dot(n);
-        const double fn = normal_magnitude(p, mbar, overlap, v_n);
-        const Vec2 v_t = v_ij - v_n * n;
-        // xi' = xi - n (n . xi), then grow by v_t dt
-        xi = xi - n * n.dot(xi) + v_t * dt;
-        // F_t* = -k_t xi' - gamma_t mbar v_t
-        const Vec2 damping = p.gamma_t * mbar * v_t;
-        Vec2 F_t = -p.k_t * xi - damping;
-        const double cap = p.mu * std::abs(fn);  // mu |F_n|
-        const double ft2 = F_t.squaredNorm();
-        if (ft2 > cap * cap) {
-            // F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
-            // xi' = -(F_t + gamma_t mbar v_t) / k_t (spring_only: xi' = -F_t / k_t)
-            F_t *= cap / std::sqrt(ft2);
-            xi = p.slip_spring_only ? Vec2(-F_t / p.k_t) : Vec2(-(F_t + damping) / p.k_t);
-        }
-        return {fn * n, F_t};
-    }
+                                                   Vec2& xi, double dt);
 };
+
+// The Vec2 form of a law: damping and spring velocities equal, the spring grows over dt.
+template <class Law>
+HOPPER_HOT_INLINE ContactForce evaluate_vec(const ContactParams& p, double mbar, const Vec2& n,
+                                            double overlap, const Vec2& v_ij, Vec2& xi, double dt) {
+    const ContactInput c{n.x(), n.y(), overlap, mbar, v_ij.x(), v_ij.y(), v_ij.x(), v_ij.y(), dt};
+    double hx = xi.x(), hy = xi.y();
+    const ContactOutput o = Law::template evaluate<false>(p, c, hx, hy);
+    if constexpr (Law::has_history) xi = Vec2(hx, hy);
+    return {o.fn * n, Vec2(o.ftx, o.fty)};
+}
+
+HOPPER_HOT_INLINE ContactForce ViscousFrictionLaw::evaluate(const ContactParams& p, double mbar,
+                                                            const Vec2& n, double overlap,
+                                                            const Vec2& v_ij, Vec2& xi, double dt) {
+    return evaluate_vec<ViscousFrictionLaw>(p, mbar, n, overlap, v_ij, xi, dt);
+}
+
+HOPPER_HOT_INLINE ContactForce SpringFrictionLaw::evaluate(const ContactParams& p, double mbar,
+                                                           const Vec2& n, double overlap,
+                                                           const Vec2& v_ij, Vec2& xi, double dt) {
+    return evaluate_vec<SpringFrictionLaw>(p, mbar, n, overlap, v_ij, xi, dt);
+}
 
 // Relative velocity of the contact points of i and j (n points from j to i):
 // v_ij = v_i - v_j - (R_i w_i + R_j w_j) (z x n)   (spec/physics.md)

@@ -100,6 +100,9 @@ struct IntegratorParams {
     Scheme scheme = Scheme::verlet;
     double steps_per_collision = 200.0;  // delta: dt = tau_c / delta
     double skin = 0.4;                   // Verlet skin, in units of d_small (bench_engine)
+    // The contact corrections of bench/results/ACCURACY.md (SystemConfig::contact_corrections):
+    // smaller collision biases at a given delta, the same model.
+    bool contact_corrections = false;
 };
 
 struct ProtocolParams {

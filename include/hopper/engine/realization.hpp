@@ -11,6 +11,7 @@
 
 #include "hopper/engine/params.hpp"
 #include "hopper/engine/result.hpp"
+#include "hopper/engine/system.hpp"
 
 namespace hopper::engine {
 
@@ -48,9 +49,9 @@ struct RunHooks {
     // Cooperative stop: when set, the realization ends with status failed and a message saying
     // it was interrupted (callers treat it as not done).
     const std::atomic<bool>* stop = nullptr;
+    // The force pass (system.hpp). How to run, not what: every path gives the same bits.
+    KernelPath kernel = KernelPath::automatic;
 };
-
-class System;
 
 // One realization, phase by phase (for benchmarks and tests; run_realization() composes them).
 // Construction builds the scene and the fill. Numerical failures (core::SimulationError) are

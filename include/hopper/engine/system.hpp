@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "hopper/core/vec.hpp"
@@ -18,6 +19,18 @@
 #include "hopper/engine/params.hpp"
 
 namespace hopper::engine {
+
+namespace detail {
+struct ForceArgs;
+}
+
+// Which implementation of the force pass runs (issue 12). Every path gives the same bits:
+// `reference` is the plain loop over the neighbour list; the batched paths pack the touching
+// pairs and evaluate the contact law in SIMD registers of the named instruction set; `automatic`
+// takes the best batched path this CPU has.
+enum class KernelPath { automatic, reference, baseline, avx2, avx512 };
+std::string to_string(KernelPath p);
+KernelPath parse_kernel_path(const std::string& s);  // "auto", "reference", ...; ConfigError
 
 struct SystemConfig {
     double dt = 1e-5;  // s
@@ -30,6 +43,13 @@ struct SystemConfig {
     // Lever arm R - x/2 (to the middle of the overlap) instead of R, in the contact velocity
     // and the torque (LeverArm in params.hpp).
     bool contact_lever = false;
+    // Contact corrections (bench/results/ACCURACY.md, proposals A, B, C): a new spring grows only
+    // over the part of the step spent in contact; with verlet the dashpots and the Coulomb cap
+    // use the velocity extrapolated to the end of the step; with gear4 the spring grows with the
+    // mean of the last corrected and the predicted velocity. Both make the spin and restitution
+    // biases of a collision smaller at a given time step (docs/accuracy.md).
+    bool contact_corrections = false;
+    KernelPath kernel = KernelPath::automatic;
 };
 
 // A particle that left through the removal floor.
@@ -121,6 +141,11 @@ class System {
     int contact_count() const { return contacts_; }
     std::int64_t neighbor_rebuilds() const { return rebuilds_; }
     const PhaseSeconds& phase_seconds() const { return phase_; }
+    // The force pass that runs (never automatic): recorded in each realization's diagnostics.
+    KernelPath kernel_path() const { return kernel_path_; }
+    // Switches the force pass (bench_engine --paths compares them on one trajectory; the bits
+    // do not change). ConfigError if this CPU cannot run it.
+    void set_kernel(KernelPath p);
     // Candidate pairs in the neighbour list (mobile-mobile, mobile-wall).
     std::int64_t pair_count() const { return static_cast<std::int64_t>(pj_.size()); }
     std::int64_t wall_pair_count() const { return static_cast<std::int64_t>(wj_.size()); }
@@ -131,9 +156,10 @@ class System {
     struct Kernel;
 
   private:
-    template <class Law, Scheme S, bool Lever>
+    template <class Law, Scheme S>
     friend struct KernelImpl;
 
+    detail::ForceArgs force_args();  // the columns and scratch of a force pass
     void ensure_ready();
     // Calls pair(i, j, k, dx, dy, d2) for every touching mobile pair of the neighbour list and
     // wall(i, j, k, dx, dy, d2) for every touching particle-wall pair (k: list entry; dx, dy:
@@ -179,6 +205,9 @@ class System {
     // Neighbour list (half list, CSR by mobile index): mobile-mobile and mobile-wall.
     std::vector<int> pstart_, pj_, wstart_, wj_;
     std::vector<double> pxi_x_, pxi_y_, wxi_x_, wxi_y_;  // tangential springs (if history_)
+    // Reduced mass per list entry, 1 / (1/m_i + 1/m_j) (walls: 1 / (1/m_i)): a per-pair constant
+    // set at each rebuild, so that the force pass divides less.
+    std::vector<double> pmbar_, wmbar_;
     // Cell grid for mobile particles (rebuilt with the list) and for walls (when walls change).
     double cell_size_ = 0.0, grid_x0_ = 0.0, grid_y0_ = 0.0;
     int grid_nx_ = 0, grid_ny_ = 0;
@@ -192,6 +221,14 @@ class System {
     std::vector<double> hist_x_, hist_y_;
     std::vector<double> scratch_;
     std::vector<int> iscratch_;
+    // Second velocity set when contact_corrections is on: verlet, velocities extrapolated to the
+    // end of the step (for the dashpots); gear4, the mean of the last corrected and the predicted
+    // velocities (for the springs).
+    std::vector<double> avx_, avy_, aw_;
+    // Batched force pass: the chosen path and its packed-pair scratch (force_batch.hpp).
+    KernelPath kernel_path_ = KernelPath::reference;
+    std::vector<std::int64_t> pack_i_;
+    std::vector<double> pack_d_;
 
     double removal_floor_ = -1e300;
     std::vector<Removal> removals_;

@@ -1,0 +1,76 @@
+#include "force_batch.hpp"
+
+#include "hopper/core/error.hpp"
+
+namespace hopper::engine {
+
+std::string to_string(KernelPath p) {
+    switch (p) {
+        case KernelPath::automatic:
+            return "auto";
+        case KernelPath::reference:
+            return "reference";
+        case KernelPath::baseline:
+            return "baseline";
+        case KernelPath::avx2:
+            return "avx2";
+        case KernelPath::avx512:
+            return "avx512";
+    }
+    return "?";
+}
+
+KernelPath parse_kernel_path(const std::string& s) {
+    for (KernelPath p : {KernelPath::automatic, KernelPath::reference, KernelPath::baseline,
+                         KernelPath::avx2, KernelPath::avx512})
+        if (s == to_string(p)) return p;
+    throw core::ConfigError("unknown force kernel '" + s +
+                            "': use auto, reference, baseline, avx2 or avx512");
+}
+
+namespace detail {
+
+bool kernel_available(KernelPath p) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    __builtin_cpu_init();
+    switch (p) {
+        case KernelPath::avx512:
+            return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                   __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
+                   __builtin_cpu_supports("avx512cd");
+        case KernelPath::avx2:
+            return __builtin_cpu_supports("avx2");
+        default:
+            return true;
+    }
+#else
+    return p != KernelPath::avx512 && p != KernelPath::avx2;
+#endif
+}
+
+KernelPath resolve_kernel(KernelPath wanted) {
+    if (wanted == KernelPath::automatic) {
+        for (KernelPath p : {KernelPath::avx512, KernelPath::avx2})
+            if (kernel_available(p)) return p;
+        return KernelPath::baseline;
+    }
+    if (!kernel_available(wanted))
+        throw core::ConfigError("the " + to_string(wanted) +
+                                " force kernel needs an instruction set this CPU does not have; "
+                                "use auto (the best this CPU has), baseline or reference");
+    return wanted;
+}
+
+const ForceTable& force_table(KernelPath p) {
+    switch (p) {
+        case KernelPath::avx512:
+            return force_table_avx512();
+        case KernelPath::avx2:
+            return force_table_avx2();
+        default:
+            return force_table_baseline();
+    }
+}
+
+}  // namespace detail
+}  // namespace hopper::engine

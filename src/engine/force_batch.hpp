@@ -1,0 +1,66 @@
+#pragma once
+// The batched force pass (issue 12): the same forces as the reference loop in system.cpp,
+// computed in three passes so that the arithmetic runs in SIMD registers:
+//   1. touch test (scalar, in list order): pairs of the neighbour list that touch are packed
+//      into contiguous columns (separation, radii, partner); springs of the others are reset;
+//   2. the contact law over the packed pairs, branch-free (pair_force.hpp), vectorized by the
+//      compiler for the instruction set the translation unit is built for;
+//   3. accumulation (scalar, in list order): forces and torques are summed in exactly the order
+//      of the reference loop, so every path gives the same bits as the reference.
+// force_batch_impl.hpp holds the passes; force_batch_{baseline,avx2,avx512}.cpp compile it once
+// per instruction set, each in its own namespace; force_batch.cpp picks one at run time.
+
+#include <cstdint>
+#include <string>
+
+#include "hopper/engine/contact.hpp"
+#include "hopper/engine/system.hpp"
+
+namespace hopper::engine::detail {
+
+// Everything a force pass reads and writes: raw columns of the System (mobile particles,
+// walls, neighbour list, springs) and scratch space for the packed pairs.
+struct ForceArgs {
+    int n = 0;  // mobile particles
+    const double *x, *y, *r, *im;
+    const double *vx, *vy, *w;     // velocities for the dashpots
+    const double *svx, *svy, *sw;  // velocities for the springs (used with the corrections)
+    double *fx, *fy, *tq;
+    const int *ps, *pj, *ws, *wj;  // neighbour list (CSR by mobile index)
+    double *hx, *hy, *gx, *gy;     // springs of mobile and wall pairs (null without history)
+    const double *wx, *wy, *wr;    // walls (base positions)
+    double ox, oy, vwx, vwy;       // wall offset and velocity
+    ContactParams pp, pw;
+    double dt, lever_half;
+    const double *pmbar, *wmbar;  // reduced mass per list entry (set at each rebuild)
+    // Scratch with room for every list entry: mobile pairs use [0, pj size), walls after.
+    struct Packed {
+        std::int64_t *own, *partner, *entry;  // 64-bit: the vectorizer pairs them with doubles
+        double *dx, *dy, *d2, *rs, *ri, *rj, *mbar;
+        double *fx, *fy, *ti, *tj, *sx, *sy, *ov;
+    } mob, wall;
+};
+
+struct ForceSums {
+    double max_overlap = 0.0, wall_fx = 0.0, wall_fy = 0.0;
+    int contacts = 0;
+};
+
+using ForceFn = ForceSums (*)(const ForceArgs&);
+
+// The batched pass of one instruction set, by law (0 frictionless, 1 viscous, 2 spring) and
+// whether the contact corrections are on (see pair_force).
+struct ForceTable {
+    ForceFn fn[3][2];
+};
+
+const ForceTable& force_table_baseline();
+const ForceTable& force_table_avx2();
+const ForceTable& force_table_avx512();
+
+// The path to use for `wanted` on this CPU; throws core::ConfigError if it is not available.
+KernelPath resolve_kernel(KernelPath wanted);
+bool kernel_available(KernelPath p);
+const ForceTable& force_table(KernelPath p);  // p is a batched path
+
+}  // namespace hopper::engine::detail
