@@ -115,6 +115,8 @@ std::string scene_text(const engine::SceneParams& p) {
     if (m.normal_damping != d.material.normal_damping)
         l.add("material.normal_damping", engine::to_string(m.normal_damping));
     if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
+    // Issue 12: listed only when on (stores written before it have it off).
+    if (p.integrator.contact_corrections) l.add("integrator.contact_corrections", std::string("true"));
     // Fields: listed only when on, so stores written before fields existed stay compatible.
     const auto& f = p.fields;
     if (f.enabled) {

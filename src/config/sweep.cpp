@@ -184,6 +184,8 @@ const std::array key_table = {
            }, "gear4,verlet"},
     KeyDef{"integrator", "steps_per_collision", "integrator.steps_per_collision", Kind::real, 2, 1e5, closed, closed, "",
            [](P& p, V v) { p.integrator.steps_per_collision = num(v); }},
+    KeyDef{"integrator", "contact_corrections", "integrator.contact_corrections", Kind::boolean, 0, 0, closed, closed, "",
+           [](P& p, V v) { p.integrator.contact_corrections = std::get<std::string>(v) == "true"; }},
     KeyDef{"integrator", "skin", "integrator.skin", Kind::real, 0, 10, open, closed, "d_small",
            [](P& p, V v) { p.integrator.skin = num(v); }},
     // [protocol]: fill, settle, jam detection, shaking, limits, sampling, guards

@@ -1,8 +1,8 @@
 #pragma once
 // The batched force pass (issue 12): the same forces as the reference loop in system.cpp,
 // computed in three passes so that the arithmetic runs in SIMD registers:
-//   1. touch test (scalar, in list order): pairs of the neighbour list that touch are packed
-//      into contiguous columns (separation, radii, partner); springs of the others are reset;
+//   1. touch test (scalar, in list order): the entries of the neighbour list that touch are
+//      packed (their index); springs of the others are reset;
 //   2. the contact law over the packed pairs, branch-free (pair_force.hpp), vectorized by the
 //      compiler for the instruction set the translation unit is built for;
 //   3. accumulation (scalar, in list order): forces and torques are summed in exactly the order
@@ -35,9 +35,10 @@ struct ForceArgs {
     const double *pmbar, *wmbar;  // reduced mass per list entry (set at each rebuild)
     // Scratch with room for every list entry: mobile pairs use [0, pj size), walls after.
     struct Packed {
-        std::int64_t *own, *partner, *entry;  // 64-bit: the vectorizer pairs them with doubles
-        double *dx, *dy, *d2, *rs, *ri, *rj, *mbar;
-        double *fx, *fy, *ti, *tj, *sx, *sy, *ov;
+        // Touching list entries, their particle and partner (64-bit: the vectorizer pairs them
+        // with doubles).
+        std::int64_t *entry, *own, *partner;
+        double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per packed pair
     } mob, wall;
 };
 

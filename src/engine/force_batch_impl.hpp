@@ -13,9 +13,9 @@
 namespace hopper::engine::detail::HOPPER_FORCE_NS {
 namespace {
 
-// Pass 1 over one kind of partner: packs the touching entries of the list in list order and
-// resets the springs of the others; returns the number packed. Partner columns: mobile
-// (x, y, r, im) or walls (wx + ox, wy + oy, wr; inverse mass 0).
+// Pass 1 over one kind of partner: packs the list entries that touch (entry, particle and
+// partner indices, in list order) and resets the springs of the others; returns the number packed.
+// Partner columns: mobile (x, y, r) or walls (wx + ox, wy + oy, wr).
 template <bool Wall>
 int pack(const ForceArgs& a, const ForceArgs::Packed& pk) {
     const int* start = Wall ? a.ws : a.ps;
@@ -25,7 +25,6 @@ int pack(const ForceArgs& a, const ForceArgs::Packed& pk) {
     const double* px = Wall ? a.wx : a.x;
     const double* py = Wall ? a.wy : a.y;
     const double* pr = Wall ? a.wr : a.r;
-    const double* mbar = Wall ? a.wmbar : a.pmbar;
     int m = 0;
     for (int i = 0; i < a.n; ++i) {
         const double xi = a.x[i], yi = a.y[i], ri = a.r[i];
@@ -36,16 +35,9 @@ int pack(const ForceArgs& a, const ForceArgs::Packed& pk) {
             const double rj = pr[j], rs = ri + rj;
             const double d2 = dx * dx + dy * dy;
             const bool touch = d2 < rs * rs;
+            pk.entry[m] = k;
             pk.own[m] = i;
             pk.partner[m] = j;
-            pk.entry[m] = k;
-            pk.dx[m] = dx;
-            pk.dy[m] = dy;
-            pk.d2[m] = d2;
-            pk.rs[m] = rs;
-            pk.ri[m] = ri;
-            pk.rj[m] = rj;
-            pk.mbar[m] = mbar[k];
             if (hx) {
                 // Not touching: the spring is forgotten.
                 hx[k] = touch ? hx[k] : 0.0;
@@ -66,9 +58,16 @@ double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
     const double dt = a.dt, lever_half = a.lever_half;
     const double* __restrict hx = Wall ? a.gx : a.hx;
     const double* __restrict hy = Wall ? a.gy : a.hy;
+    const std::int64_t* __restrict entry = pk.entry;
     const std::int64_t* __restrict own = pk.own;
     const std::int64_t* __restrict partner = pk.partner;
-    const std::int64_t* __restrict entry = pk.entry;
+    const double* __restrict mbar = Wall ? a.wmbar : a.pmbar;
+    const double* __restrict x = a.x;
+    const double* __restrict y = a.y;
+    const double* __restrict r = a.r;
+    const double* __restrict px = Wall ? a.wx : a.x;
+    const double* __restrict py = Wall ? a.wy : a.y;
+    const double* __restrict pr = Wall ? a.wr : a.r;
     const double* __restrict vx = a.vx;
     const double* __restrict vy = a.vy;
     const double* __restrict w = a.w;
@@ -82,25 +81,19 @@ double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
     double* __restrict osx = pk.sx;
     double* __restrict osy = pk.sy;
     double* __restrict oov = pk.ov;
-    const double* __restrict pdx = pk.dx;
-    const double* __restrict pdy = pk.dy;
-    const double* __restrict pd2 = pk.d2;
-    const double* __restrict prs = pk.rs;
-    const double* __restrict pmb = pk.mbar;
-    const double* __restrict pri = pk.ri;
-    const double* __restrict prj = pk.rj;
-    const double vwx = a.vwx, vwy = a.vwy;
+    const double vwx = a.vwx, vwy = a.vwy, ox = a.ox, oy = a.oy;
 #pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN)
     for (int t = 0; t < m; ++t) {
-        const std::int64_t i = own[t], j = partner[t];
+        // Gathered from the columns; separation and radii recomputed exactly as pass 1 did.
+        const std::int64_t k = entry[t], i = own[t], j = partner[t];
         PairInput q;
-        q.dx = pdx[t];
-        q.dy = pdy[t];
-        q.d2 = pd2[t];
-        q.rs = prs[t];
-        q.mbar = pmb[t];
-        q.ri = pri[t];
-        q.rj = prj[t];
+        q.dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
+        q.dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
+        q.ri = r[i];
+        q.rj = pr[j];
+        q.rs = q.ri + q.rj;
+        q.d2 = q.dx * q.dx + q.dy * q.dy;
+        q.mbar = mbar[k];
         q.vix = vx[i];
         q.viy = vy[i];
         q.wi = rot ? w[i] : 0.0;
@@ -119,8 +112,8 @@ double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
         }
         double sx = 0.0, sy = 0.0;
         if constexpr (hist) {
-            sx = hx[entry[t]];
-            sy = hy[entry[t]];
+            sx = hx[k];
+            sy = hy[k];
         }
         const PairOutput o = pair_force<Law, Corr, true>(p, dt, lever_half, q, sx, sy);
         ofx[t] = o.fx;
@@ -156,7 +149,7 @@ void accumulate(const ForceArgs& a, int nm, int nw, ForceSums& sums) {
     for (int i = 0; i < a.n; ++i) {
         double fxi = 0.0, fyi = 0.0, tqi = 0.0;
         for (; t < nm && pm.own[t] == i; ++t) {
-            const int j = pm.partner[t];
+            const std::int64_t j = pm.partner[t];
             fxi += pm.fx[t];
             fyi += pm.fy[t];
             a.fx[j] -= pm.fx[t];

@@ -624,19 +624,17 @@ detail::ForceArgs System::force_args() {
     a.pmbar = pmbar_.data();
     a.wmbar = wmbar_.data();
     if (kernel_path_ != KernelPath::reference) {
-        // Packed-pair scratch: 3 int and 14 double columns, mobile pairs then wall pairs.
+        // Packed-pair scratch: 3 index and 7 double columns, mobile pairs then walls.
         const std::size_t np = pj_.size(), nw = wj_.size(), len = np + nw;
         if (pack_i_.size() < 3 * len) pack_i_.resize(3 * len);
-        if (pack_d_.size() < 14 * len) pack_d_.resize(14 * len);
+        if (pack_d_.size() < 7 * len) pack_d_.resize(7 * len);
         auto carve = [&](detail::ForceArgs::Packed& pk, std::size_t off) {
-            std::int64_t* ib = pack_i_.data();
             double* db = pack_d_.data();
-            pk.own = ib + off;
-            pk.partner = ib + len + off;
-            pk.entry = ib + 2 * len + off;
-            double** cols[] = {&pk.dx, &pk.dy, &pk.d2, &pk.rs, &pk.ri, &pk.rj, &pk.mbar,
-                               &pk.fx, &pk.fy, &pk.ti, &pk.tj, &pk.sx, &pk.sy, &pk.ov};
-            for (std::size_t c = 0; c < 14; ++c)
+            pk.entry = pack_i_.data() + off;
+            pk.own = pack_i_.data() + len + off;
+            pk.partner = pack_i_.data() + 2 * len + off;
+            double** cols[] = {&pk.fx, &pk.fy, &pk.ti, &pk.tj, &pk.sx, &pk.sy, &pk.ov};
+            for (std::size_t c = 0; c < 7; ++c)
                 *cols[c] = db + c * len + off;
         };
         carve(a.mob, 0);

@@ -151,6 +151,10 @@ TEST(SweepParse, ModellingChoiceKeysLandInTheScene) {
     EXPECT_EQ(d.material.lever_arm, e::LeverArm::radius);
     EXPECT_EQ(d.material.normal_damping, e::NormalDamping::nominal);
     EXPECT_EQ(d.protocol.fill_base, 0.0);
+    EXPECT_FALSE(d.integrator.contact_corrections);
+    EXPECT_TRUE(parse("[integrator]\ncontact_corrections = true\n").base.integrator.contact_corrections);
+    EXPECT_THAT(error_of("[integrator]\ncontact_corrections = 1\n"),
+                HasSubstr("integrator.contact_corrections"));
     const SweepFile s = parse(
         "[hopper]\noutlet_measure = \"inner_envelope\"\n"
         "[walls]\nedge_diameter_cm = 0.602\nedge_offset = 0.5\n"

@@ -27,7 +27,7 @@ struct ForceArgs;
 // Which implementation of the force pass runs (issue 12). Every path gives the same bits:
 // `reference` is the plain loop over the neighbour list; the batched paths pack the touching
 // pairs and evaluate the contact law in SIMD registers of the named instruction set; `automatic`
-// takes the best batched path this CPU has.
+// takes the path measured fastest (force_batch.cpp: the reference on the machines measured).
 enum class KernelPath { automatic, reference, baseline, avx2, avx512 };
 std::string to_string(KernelPath p);
 KernelPath parse_kernel_path(const std::string& s);  // "auto", "reference", ...; ConfigError
