@@ -115,6 +115,10 @@ std::string scene_text(const engine::SceneParams& p) {
     if (m.normal_damping != d.material.normal_damping)
         l.add("material.normal_damping", engine::to_string(m.normal_damping));
     if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
+    // Steady state (issue 13): listed only when not the published protocol.
+    if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
+    if (q.jams_per_realization != d.protocol.jams_per_realization)
+        l.add("protocol.jams_per_realization", q.jams_per_realization);
     // Fields: listed only when on, so stores written before fields existed stay compatible.
     const auto& f = p.fields;
     if (f.enabled) {

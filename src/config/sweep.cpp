@@ -223,6 +223,13 @@ const std::array key_table = {
            [](P& p, V v) { p.protocol.sample_interval = num(v); }},
     KeyDef{"protocol", "max_overlap", "protocol.max_overlap", Kind::real, 0, 1, open, closed, "d_small",
            [](P& p, V v) { p.protocol.max_overlap = num(v); }},
+    KeyDef{"protocol", "mode", "protocol.mode", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               using M = engine::ProtocolMode;
+               p.protocol.mode = choice_of(v, {M::published, M::steady_state});
+           }, "published,steady_state"},
+    KeyDef{"protocol", "jams_per_realization", "protocol.jams_per_realization", Kind::integer, 0, 1e7, closed, closed, "",
+           [](P& p, V v) { p.protocol.jams_per_realization = static_cast<int>(num(v)); }},
     // [fields]: coarse-grained velocity and pressure fields of the discharge (off by default)
     KeyDef{"fields", "enabled", "fields.enabled", Kind::boolean, 0, 0, closed, closed, "",
            [](P& p, V v) { p.fields.enabled = std::get<std::string>(v) == "true"; }},

@@ -51,7 +51,7 @@ std::string refusal(const store::CampaignPlan& stored, const store::CampaignPlan
 TEST(Plan, SceneTextCoversEverySceneParameter) {
     // If this fails, engine::SceneParams gained (or lost) a field: add it to scene_text() in
     // src/campaign/plan.cpp (it decides which stores a sweep may resume), then update the size.
-    EXPECT_EQ(sizeof(engine::SceneParams), 472u);
+    EXPECT_EQ(sizeof(engine::SceneParams), 480u);
     engine::SceneParams p;
     const std::string base = scene_text(p);
     EXPECT_EQ(std::count(base.begin(), base.end(), '\n'), 40);
