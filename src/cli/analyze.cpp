@@ -1098,7 +1098,46 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
     store::DerivedGroup jr{
         "jam_rate", {{"description", "jam rate 1/tau versus D per group"}}, std::move(j.ds), {}};
 
-    root.groups = {std::move(points), std::move(km), std::move(bev), std::move(jr)};
+    // <s>(D) per group: the fit of p = 1/<s>, written as <s> (ln_s0 = -ln A).
+    Columns v;
+    v.text("group", "theta and other varied settings",
+           per_group(a, [](auto& g) { return g.group; }));
+    v.real("theta_deg", "deg", "wall angle", per_group(a, [](auto& g) { return g.theta_deg; }));
+    v.integer("n_points", "outlets with jams",
+              per_group(a, [](auto& g) { return I(g.avalanche.n_points); }));
+    const auto vex = [&](auto get) {
+        return per_group(a, [&](auto& g) {
+            return when(g.avalanche.exponential.valid, get(g.avalanche.exponential));
+        });
+    };
+    const auto vpw = [&](auto get) {
+        return per_group(a, [&](auto& g) {
+            return when(g.avalanche.power_law.valid, get(g.avalanche.power_law));
+        });
+    };
+    v.optional("exp_ln_s0", "1", "exponential growth <s> = exp(ln_s0 + B D): ln_s0",
+               vex([](auto& f) { return -f.ln_A; }));
+    v.optional("exp_B", "1/m", "exponential growth: B", vex([](auto& f) { return f.B; }));
+    v.optional("exp_B_err", "1/m", "exponential growth: s.e. of B",
+               vex([](auto& f) { return f.B_err; }));
+    v.optional("exp_aic", "1", "exponential growth: AIC", vex([](auto& f) { return f.aic; }));
+    v.optional("pow_ln_s0", "1", "power law <s> = exp(ln_s0) (Dc - D)^-gamma: ln_s0",
+               vpw([](auto& f) { return -f.ln_A; }));
+    v.optional("pow_gamma", "1", "power law: gamma", vpw([](auto& f) { return f.gamma; }));
+    v.optional("pow_gamma_err", "1", "power law: s.e. of gamma",
+               vpw([](auto& f) { return f.gamma_err; }));
+    v.optional("pow_Dc", "m", "power law: critical outlet Dc", vpw([](auto& f) { return f.Dc; }));
+    v.optional("pow_Dc_err", "m", "power law: s.e. of Dc", vpw([](auto& f) { return f.Dc_err; }));
+    v.optional("pow_aic", "1", "power law: AIC", vpw([](auto& f) { return f.aic; }));
+    v.text("preferred", "exponential, power_law or undecided",
+           per_group(a, [](auto& g) { return g.avalanche.preferred; }));
+    v.text("decision", "why", per_group(a, [](auto& g) { return g.avalanche.decision; }));
+    store::DerivedGroup av{"avalanche",
+                           {{"description", "mean avalanche size <s> versus D per group"}},
+                           std::move(v.ds),
+                           {}};
+
+    root.groups = {std::move(points), std::move(km), std::move(bev), std::move(jr), std::move(av)};
     if (auto f = fields_group(a)) root.groups.push_back(std::move(*f));
     return root;
 }
