@@ -126,6 +126,7 @@ struct Realization::Impl {
     // Particles that had left (crossed the outlet plane) when the current avalanche began: at
     // the opening, then at each jam's detection.
     int interval_base = 0;
+    double insert_base = 0.0;  // steady state: the settled packing's top at the opening
     Phase phase = Phase::settle;
     Flow flow = Flow::flowing;
     Clock::time_point wall_start;
@@ -235,15 +236,13 @@ struct Realization::Impl {
     }
 
     // Steady state: each particle that left comes back at the top of the packing, at a
-    // position drawn from the realization's generator where it overlaps nothing.
+    // position drawn from the realization's generator where it overlaps nothing: x across the
+    // container, y in a band from half a large diameter to three above the settled packing's
+    // top (measured at the opening; the head stays there as the count is constant). Measuring
+    // the top anew would follow particles still falling from earlier insertions upward.
     void reinsert(int id) {
         const double d = diameter_of_id[id], rad = 0.5 * d;
-        double top = y_outlet;
-        {
-            const auto y = sys->y(), r = sys->r();
-            for (std::size_t i = 0; i < y.size(); ++i)
-                top = std::max(top, y[i] + r[i]);
-        }
+        const double top = insert_base;
         const double half_w = 0.5 * p.hopper.width - 1.01 * rad;
         const Vec2 off = sys->wall_offset();
         const auto overlaps = [&](const Vec2& q) {
@@ -261,8 +260,9 @@ struct Realization::Impl {
             return false;
         };
         for (int attempt = 0; attempt < 2000; ++attempt) {
-            // Half a large diameter above the packing, one more for every 20 failed draws.
-            const double lift = (0.5 + attempt / 20) * p.particles.d_large;
+            // The band widens by a large diameter for every 200 failed draws.
+            const double band = 2.5 + attempt / 200;
+            const double lift = rng.uniform(0.5, 0.5 + band) * p.particles.d_large;
             const Vec2 q(rng.uniform(-half_w, half_w), top + rad + lift);
             if (overlaps(q)) continue;
             const int nid =
@@ -380,6 +380,12 @@ struct Realization::Impl {
         flow = Flow::flowing;
         td = flow_start = last_occupied = 0.0;
         interval_base = left_count();
+        insert_base = y_outlet;
+        {
+            const auto y = sys->y(), r = sys->r();
+            for (std::size_t i = 0; i < y.size(); ++i)
+                insert_base = std::max(insert_base, y[i] + r[i]);
+        }
         log(Event::Kind::opened);
         sample();
         if (p.fields.enabled) start_fields();
