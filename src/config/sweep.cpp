@@ -255,9 +255,14 @@ const std::array key_table = {
 
 constexpr std::array<std::string_view, 6> scene_sections = {"hopper",     "material", "walls",
                                                             "integrator", "protocol", "fields"};
-constexpr std::array<std::string_view, 8> campaign_keys = {
-    "name", "store", "seed", "realizations", "target", "target_rel_ci", "max_realizations",
-    "round_realizations"};
+constexpr std::array<std::string_view, 8> campaign_keys = {"name",
+                                                           "store",
+                                                           "seed",
+                                                           "realizations",
+                                                           "target",
+                                                           "target_rel_ci",
+                                                           "max_realizations",
+                                                           "round_realizations"};
 
 bool is_scene_section(std::string_view s) {
     return std::find(scene_sections.begin(), scene_sections.end(), s) != scene_sections.end();
@@ -710,8 +715,9 @@ void Parser::read_campaign(const toml::node& node, SweepFile& out) const {
              "target = \"tau\" or \"mean_s\" (a campaign that stops when good enough)");
     if (c.target && c.target->round == 0) c.target->round = c.realizations;
     if (c.target && c.target->max_realizations == 0)
-        fail(node.source(), "[campaign] target needs max_realizations (the most realizations a "
-                            "point may get), e.g. max_realizations = 100");
+        fail(node.source(),
+             "[campaign] target needs max_realizations (the most realizations a "
+             "point may get), e.g. max_realizations = 100");
     const fs::path dir = path_.parent_path();
     if (c.store.empty()) c.store = c.name + ".h5";
     if (c.store.is_relative()) c.store = dir / c.store;

@@ -72,8 +72,9 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));
     // The modelling choices of issue 11: absent from the text at their defaults (so stores
     // written before them resume), present when set.
-    for (const char* name : {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over",
-                             "slip_rule", "lever_arm", "normal_damping", "fill_base"})
+    for (const char* name :
+         {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over", "slip_rule",
+          "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
     EXPECT_TRUE(
         changed([](auto& q) { q.hopper.outlet_measure = engine::OutletMeasure::inner_envelope; }));
@@ -85,6 +86,20 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed(
         [](auto& q) { q.material.normal_damping = engine::NormalDamping::exact_restitution; }));
     EXPECT_TRUE(changed([](auto& q) { q.protocol.fill_base = 1.0; }));
+    // Issue 13's steady state, likewise.
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.mode = engine::ProtocolMode::steady_state; }));
+    EXPECT_TRUE(changed([](auto& q) {
+                    q.protocol.mode = engine::ProtocolMode::steady_state;
+                    q.protocol.jams_per_realization = 5;
+                }) &&
+                [] {
+                    engine::SceneParams q;
+                    q.protocol.mode = engine::ProtocolMode::steady_state;
+                    q.protocol.jams_per_realization = 5;
+                    return scene_text(q).find(
+                               "protocol.mode=steady_state\nprotocol.jams_per_realization=5\n") !=
+                           std::string::npos;
+                }());
     // Shortest round-trip numbers: one ulp differs.
     EXPECT_TRUE(changed([](auto& q) { q.material.system.e_n = std::nextafter(0.5, 1.0); }));
 }
