@@ -10,8 +10,8 @@ expect_in one.err "campaign: target tau: no point needs more after round"
 expect_in one.err "target met: relative 95 % half-width"
 digest "$WORK/one.h5" one.digest
 n=$(wc -l <one.digest)
-[ "$n" -gt 6 ] && [ "$n" -lt 18 ] || fail "$n realizations: the rounds should stop between 6 and 18"
-expect_in one.err "max_realizations = 6 reached"
+[ "$n" -gt 6 ] && [ "$n" -le 12 ] || fail "$n realizations: the rounds should stop between 7 and 12"
+expect_in one.err "max_realizations = 4 reached"
 
 if [ "${1:-}" = mpi ]; then
     run_expect 0 mpi mpirun -np 3 "$EXE" run "$SWEEP" --store "$WORK/mpi.h5" --progress-interval 0
