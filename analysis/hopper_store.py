@@ -293,12 +293,25 @@ class Store:
     def survival(self):
         """One row per survival interval: row, point, realization, label, D_cm, theta_deg,
         interval (0-based within the realization), duration (s of discharge time), event (1: ended
-        by a jam, 0: right-censored). Failed realizations are left out. Ready for
-        lifelines.KaplanMeierFitter().fit(df.duration, df.event) or R's Surv(duration, event)."""
+        by a jam, 0: right-censored), avalanche_size (grains that crossed the outlet during the
+        interval; NaN for realizations stored before avalanche sizes were recorded). Failed
+        realizations are left out. Ready for lifelines.KaplanMeierFitter().fit(df.duration,
+        df.event) or R's Surv(duration, event)."""
         def make():
-            df = self._ragged("survival", ["survival_times", "censored"],
+            has_sizes = "avalanche_size" in self._f["ragged"]
+            df = self._ragged("survival", ["survival_times", "censored"]
+                              + (["avalanche_size"] if has_sizes else []),
                               {"survival_times": "duration"})
             df["event"] = (~df.pop("censored").astype(bool)).astype(np.int64)
+            known = self.realizations["has_avalanche_sizes"].to_numpy().astype(bool) \
+                if has_sizes and "has_avalanche_sizes" in self.realizations else None
+            if known is not None and len(df):
+                sizes = df.pop("avalanche_size").astype(float)
+                df["avalanche_size"] = np.where(known[df["row"].to_numpy()], sizes, np.nan)
+            else:
+                if "avalanche_size" in df:
+                    df = df.drop(columns="avalanche_size")
+                df["avalanche_size"] = np.full(len(df), np.nan)
             df = self._add_point_columns(df)
             df.insert(3, "interval", df.groupby("row").cumcount())
             ok = self.realizations["status"].to_numpy()[df["row"].to_numpy()] != "failed" \
@@ -336,6 +349,39 @@ class Store:
         return self._cached("jams", lambda: self._add_point_columns(self._ragged(
             "jam", ["jam_onsets", "shakes_per_jam"],
             {"jam_onsets": "onset", "shakes_per_jam": "shakes"})))
+
+    @property
+    def arches(self):
+        """One row per jam of a realization that recorded arches: jam (0-based within the
+        realization), disks (0: no arch found), span (m), max_angle (deg), and the disks' ids and
+        centres (m) as lists left to right. Empty for stores written before arches existed."""
+        def make():
+            if "arch_disks" not in self._f["ragged"]:
+                return pd.DataFrame(columns=["row", "point", "realization", "label", "D_cm",
+                                             "theta_deg", "jam", "disks", "span", "max_angle",
+                                             "ids", "x", "y"])
+            df = self._ragged("arch", ["arch_disks", "arch_span", "arch_max_angle"],
+                              {"arch_disks": "disks", "arch_span": "span",
+                               "arch_max_angle": "max_angle"})
+            df["max_angle"] = np.degrees(df["max_angle"].astype(float))
+            disks = self._ragged("arch_disk", ["arch_disk_id", "arch_disk_x", "arch_disk_y"])
+            ids, xs, ys = [], [], []
+            at = {}
+            for row, group in disks.groupby("row", sort=False):
+                at[row] = (group["arch_disk_id"].to_numpy(), group["arch_disk_x"].to_numpy(),
+                           group["arch_disk_y"].to_numpy(), 0)
+            for row, n in zip(df["row"].to_numpy(), df["disks"].to_numpy()):
+                i, x, y, k = at.get(row, (np.zeros(0), np.zeros(0), np.zeros(0), 0))
+                ids.append(list(i[k:k + n]))
+                xs.append(list(x[k:k + n]))
+                ys.append(list(y[k:k + n]))
+                if row in at:
+                    at[row] = (i, x, y, k + n)
+            df["ids"], df["x"], df["y"] = ids, xs, ys
+            df = self._add_point_columns(df)
+            df.insert(6, "jam", df.groupby("row").cumcount())
+            return df
+        return self._cached("arches", make)
 
     @property
     def exits(self):
@@ -393,6 +439,12 @@ class Store:
     def beverloo(self):
         """/analysis/beverloo: one row per group (C, k with errors, rho_b, d, reason)."""
         return self._group_table("beverloo")
+
+    @property
+    def avalanche(self):
+        """/analysis/avalanche: <s>(D) per group, exponential growth and power-law divergence
+        (Zuriguel's form) with the AIC verdict."""
+        return self._group_table("avalanche")
 
     @property
     def jam_rate(self):

@@ -593,6 +593,105 @@ def plot_fields_comparison(st, fields, labels, field, width):
     return fig
 
 
+# ----- avalanche sizes and arches (issue 13) ----------------------------------------------------
+
+def has_avalanches(store):
+    try:
+        surv = store.survival
+    except Exception:  # a store without the ragged data (synthetic stores)
+        return False
+    return "avalanche_size" in surv and bool(surv["avalanche_size"].notna().any())
+
+
+def plot_avalanche(st, width):
+    fig, (ax_s, ax_d) = layout(st, 2, width, panel_h=2.3,
+                               legend_rows=legend_rows(list(st.groups) + ["exponential fit",
+                                                                          "power-law fit"], width))
+    surv = st.s.survival
+    handles, labels = [], []
+    fits = {"exp": False, "pow": False}
+    for g, rows in st.groups.items():
+        c, m = st.group_colour[g], st.group_marker[g]
+        D, s, lo, hi = [], [], [], []
+        for i in rows:
+            v = st.get(i, "mean_avalanche")
+            if v is None:
+                continue
+            D.append(float(st.points.at[i, "D_cm"]))
+            s.append(v)
+            lo.append(st.get(i, "mean_avalanche_ci95_lo") or v)
+            hi.append(st.get(i, "mean_avalanche_ci95_hi") or v)
+        D, s, lo, hi = map(np.array, (D, s, lo, hi))
+        if len(D):
+            ax_s.errorbar(D, s, yerr=[s - lo, hi - s], fmt=m, color=c, capsize=2, ms=3)
+        handles.append(plt.Line2D([], [], color=c, marker=m, ls="none", ms=3))
+        labels.append(g or "all points")
+        fit = st.fit_row("avalanche", g) if st.s.has_analysis else None
+        if fit is not None and len(D):
+            DD = np.linspace(D.min(), D.max(), 100)
+            if not _missing(fit.get("exp_B")):
+                ax_s.plot(DD, np.exp(fit["exp_ln_s0"] + fit["exp_B"] * DD / 100), "-",
+                          color=c, lw=0.9)
+                fits["exp"] = True
+            if not _missing(fit.get("pow_gamma")) and not _missing(fit.get("pow_Dc")):
+                DDp = DD[DD / 100 < fit["pow_Dc"]]
+                ax_s.plot(DDp, np.exp(fit["pow_ln_s0"]
+                                      - fit["pow_gamma"] * np.log(fit["pow_Dc"] - DDp / 100)),
+                          ":", color=c, lw=1.1)
+                fits["pow"] = True
+        # Distribution of s: the fraction of completed avalanches larger than s (descriptive;
+        # the censored last avalanche of each realization is left out), and exp(-s/<s>).
+        for i in rows:
+            sz = np.sort(surv.loc[(surv["point"] == i) & (surv["event"] == 1),
+                                  "avalanche_size"].dropna().to_numpy())
+            if not len(sz):
+                continue
+            d = float(st.points.at[i, "D_cm"])
+            ccdf = 1.0 - np.arange(len(sz)) / len(sz)
+            ax_d.step(sz, ccdf, where="post", color=st.D_colour[d], lw=0.9)
+            mean = st.get(i, "mean_avalanche")
+            if mean:
+                ss = np.linspace(0, sz.max(), 50)
+                ax_d.plot(ss, np.exp(-ss / mean), "--", color=st.D_colour[d], lw=0.7)
+    ax_s.set_yscale("log")
+    ax_d.set_yscale("log")
+    ax_s.set_xlabel("D (cm)")
+    ax_s.set_ylabel(r"mean avalanche size $\langle s\rangle$")
+    ax_d.set_xlabel("avalanche size s (grains)")
+    ax_d.set_ylabel("P(size > s)")
+    if fits["exp"]:
+        handles.append(plt.Line2D([], [], color="0.3", ls="-", lw=0.9))
+        labels.append("exponential fit")
+    if fits["pow"]:
+        handles.append(plt.Line2D([], [], color="0.3", ls=":", lw=1.1))
+        labels.append("power-law fit")
+    shared_legend(fig, handles, labels, width)
+    return fig
+
+
+def plot_arch_sizes(st, width):
+    arches = st.s.arches
+    fig, axes = layout(st, len(st.groups), width, panel_h=2.1,
+                       legend_rows=legend_rows([D_text(d) for d in st.Ds], width))
+    used = set()
+    for ax, (g, rows) in zip(axes, st.groups.items()):
+        for i in rows:
+            a = arches[(arches["point"] == i) & (arches["disks"] > 0)]
+            if not len(a):
+                continue
+            d = float(st.points.at[i, "D_cm"])
+            counts = a["disks"].value_counts().sort_index()
+            ax.plot(counts.index, counts.to_numpy() / len(a), "o-", color=st.D_colour[d], ms=3)
+            used.add(d)
+        ax.set_xlabel("disks in the arch")
+        ax.set_ylabel("fraction of arches")
+        if g:
+            ax.set_title(g)
+    handles, labels = D_legend(st, [d for d in st.Ds if d in used])
+    shared_legend(fig, handles, labels, width)
+    return fig
+
+
 # ----- all figures -----------------------------------------------------------------------------
 
 FIGURES = [("survival", plot_survival), ("jam_rate", plot_jam_rate),
@@ -607,6 +706,9 @@ def figures(store, width=WIDTHS["page"]):
         st = Study(store)
         for name, draw in FIGURES:
             yield name, draw(st, width)
+        if has_avalanches(store):
+            yield "avalanche", plot_avalanche(st, width)
+            yield "arch_sizes", plot_arch_sizes(st, width)
         fields = store.fields()
         for label, ds in fields.items():
             yield "fields_" + file_part(label), plot_field_point(st, PointFields(label, ds), width)

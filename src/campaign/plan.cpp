@@ -117,6 +117,10 @@ std::string scene_text(const engine::SceneParams& p) {
     if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
     // Issue 12: listed only when on (stores written before it have it off).
     if (p.integrator.contact_corrections) l.add("integrator.contact_corrections", std::string("true"));
+    // Steady state (issue 13): listed only when not the published protocol.
+    if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
+    if (q.jams_per_realization != d.protocol.jams_per_realization)
+        l.add("protocol.jams_per_realization", q.jams_per_realization);
     // Fields: listed only when on, so stores written before fields existed stay compatible.
     const auto& f = p.fields;
     if (f.enabled) {

@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <map>
 #include <numeric>
 #include <thread>
 
+#include "hopper/campaign/adaptive.hpp"
 #include "hopper/campaign/inproc_channel.hpp"
 #include "hopper/campaign/mixing.hpp"
 #include "hopper/campaign/mpi.hpp"
@@ -94,6 +96,65 @@ TaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
         if (opt.runner) return opt.runner(t, scene, hooks);
         return engine::run_realization(scene, t.seed, hooks);
     };
+}
+
+// A campaign with a target (adaptive.hpp): rounds until no point needs more. Each round's
+// decisions are replayed from the journal, so an interrupted run resumes the same sequence.
+MasterReport run_rounds(Master& master, const Campaign& c, const fs::path& store_path,
+                        const std::vector<double>& cost, Totals totals, std::ostream& err) {
+    const auto& spec = c.sweep.campaign;
+    const auto quantity = spec.target->quantity;
+    std::map<std::pair<int, int>, const config::Task*> task_of;
+    for (const auto& t : c.tasks)
+        task_of[{t.point_index, t.realization}] = &t;
+    MasterReport all;
+    for (;;) {
+        std::map<std::string, PointResults> stored;
+        for (auto& r : store::read_journal_realizations(store_path))
+            stored[r.label][r.record.realization] = std::move(r.result);
+        const RoundState rs = replay_rounds(spec, stored, cost);
+        if (rs.finished) {
+            err << "campaign: target " << config::to_string(quantity)
+                << ": no point needs more after round " << rs.round + 1 << ":\n"
+                << describe_rounds(rs, quantity) << std::flush;
+            break;
+        }
+        std::vector<TaskRef> todo;
+        for (const auto& [p, i] : rs.missing) {
+            const config::Task* t = task_of.at({p, i});
+            todo.push_back(TaskRef{t->task_id, spec.points[std::size_t(p)].label, i, t->seed,
+                                   expected_seconds(cost[std::size_t(p)])});
+        }
+        err << "campaign: round " << rs.round + 1 << " (target " << config::to_string(quantity)
+            << ", relative 95 % half-width <= " << spec.target->rel_half_width
+            << "): " << todo.size() << " realization(s) to run\n"
+            << describe_rounds(rs, quantity) << std::flush;
+        const MasterReport r = master.run(todo, totals);
+        totals.finished += r.stored;
+        all.stored += r.stored;
+        all.failed += r.failed;
+        all.errors += r.errors;
+        all.gave_up += r.gave_up;
+        all.interrupted += r.interrupted;
+        all.not_started += r.not_started;
+        all.reassigned += r.reassigned;
+        all.late_identical += r.late_identical;
+        all.late_different += r.late_different;
+        all.silent_at_end = r.silent_at_end;
+        all.wall_seconds += r.wall_seconds;
+        all.cpu_seconds += r.cpu_seconds;
+        if (r.stopped) {
+            all.stopped = true;
+            all.stop_reason = r.stop_reason;
+            break;
+        }
+        if (r.gave_up > 0 || r.stored == 0) {
+            err << "campaign: round " << rs.round + 1 << " is incomplete (realizations left in "
+                << "error); run the same command again to retry them and go on" << std::endl;
+            break;
+        }
+    }
+    return all;
 }
 
 // What the caller of run_master() needs to know about how it ended.
@@ -185,7 +246,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
 
     state->dispatching = true;
     Master master(channel, st, signals, opt.master, err);
-    const MasterReport rep = master.run(todo, totals);
+    const MasterReport rep = spec.target ? run_rounds(master, c, store_path, cost, totals, err)
+                                         : master.run(todo, totals);
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 
@@ -233,8 +295,13 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             << "`. Exceptions are retried by running the same command again." << std::endl;
         return run_with_failures;
     }
-    err << "campaign: finished: all " << totals.total << " realizations are in "
-        << store_path.string() << std::endl;
+    if (spec.target)
+        err << "campaign: finished: every point met the target or reached max_realizations; "
+            << status.done + status.failed << " realizations are in " << store_path.string()
+            << std::endl;
+    else
+        err << "campaign: finished: all " << totals.total << " realizations are in "
+            << store_path.string() << std::endl;
     return run_ok;
 }
 

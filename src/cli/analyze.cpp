@@ -194,6 +194,102 @@ AnalysisPointInput in_realization_order(AnalysisPointInput in) {
     return out;
 }
 
+namespace {
+
+// Issue 16: points pooled with --allow-mixed can differ in settings their labels do not show.
+// Within each group of points whose labels agree on everything but D (the groups the labels
+// make), every scene parameter other than the outlet whose value differs is added to the group
+// as " name=value", so such points are fitted apart. Stores whose labels show every difference
+// get nothing added (their groups are unchanged).
+std::map<std::string, std::string> hidden_settings(const std::vector<AnalysisPointInput>& inputs) {
+    std::map<std::string, std::vector<const AnalysisPointInput*>> by_label_group;
+    for (const auto& in : inputs) {
+        std::string key;
+        for (const auto& [k, v] : label_settings(in.label))
+            if (k != "D_cm") key += k + "=" + v + " ";
+        by_label_group[key].push_back(&in);
+    }
+    std::map<std::string, std::string> out;
+    for (const auto& [key, members] : by_label_group) {
+        std::set<std::string> names;
+        for (const auto* in : members)
+            for (const auto& [k, v] : in->scene)
+                names.insert(k);
+        std::vector<std::string> differing;
+        for (const auto& name : names) {
+            if (name == "hopper.outlet_m") continue;
+            std::set<std::string> values;
+            for (const auto* in : members) {
+                const auto it = in->scene.find(name);
+                values.insert(it == in->scene.end() ? "absent" : it->second);
+            }
+            if (values.size() > 1) differing.push_back(name);
+        }
+        for (const auto* in : members) {
+            std::string extra;
+            for (const auto& name : differing) {
+                const auto it = in->scene.find(name);
+                extra += " " + name + "=" + (it == in->scene.end() ? "absent" : it->second);
+            }
+            if (!extra.empty()) out[in->label] = extra;
+        }
+    }
+    return out;
+}
+
+AvalancheAnalysis analyze_avalanches(const AnalysisPointInput& in) {
+    AvalancheAnalysis av;
+    std::vector<double> s, windows;
+    std::vector<bool> censored;
+    double span = 0.0, angle = 0.0, size = 0.0;
+    for (const auto& r : in.results) {
+        if (r.status == engine::Status::failed) continue;
+        if (r.avalanche_sizes.size() != r.survival_times.size() || r.survival_times.empty()) {
+            if (!r.survival_times.empty()) ++av.realizations_without;
+        } else {
+            ++av.realizations;
+            double w = 0.0;
+            for (std::size_t i = 0; i < r.avalanche_sizes.size(); ++i) {
+                s.push_back(double(r.avalanche_sizes[i]));
+                censored.push_back(i < r.censored.size() && r.censored[i]);
+                w += double(r.avalanche_sizes[i]);
+            }
+            windows.push_back(w);
+        }
+        for (const auto& arch : r.arches) {
+            ++av.arch_jams;
+            if (!arch.found()) continue;
+            ++av.arches_found;
+            const std::size_t n = arch.ids.size();
+            if (av.arch_size_counts.size() <= n) av.arch_size_counts.resize(n + 1, 0);
+            ++av.arch_size_counts[n];
+            size += double(n);
+            span += arch.span;
+            angle += arch.max_angle / core::deg;
+        }
+    }
+    if (av.arches_found > 0) {
+        av.arch_mean_size = size / av.arches_found;
+        av.arch_mean_span_m = span / av.arches_found;
+        av.arch_mean_max_angle_deg = angle / av.arches_found;
+    }
+    if (s.empty()) {
+        av.reason = av.realizations_without > 0
+                        ? "the realizations were stored before avalanche sizes were recorded"
+                        : "no survival intervals";
+        av.gof.reason = av.reason;
+        return av;
+    }
+    av.fit = stats::fit_censored_exponential(s, censored);
+    if (!av.fit->tau) av.reason = "no jams";
+    stats::GofOptions go;
+    go.seed = store::fnv1a64(in.label) ^ 0x5bd1e9955bd1e995ULL;  // from the point
+    av.gof = stats::ks_exponential_censored(s, censored, windows, go);
+    return av;
+}
+
+}  // namespace
+
 Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
     Analysis a;
     a.rho_b_source = "estimate: rho_b = " + json_number(kAssumedPackingFraction) +
@@ -203,6 +299,7 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
     a.d_definition =
         "d = number-weighted mean diameter f_small d_small + (1 - f_small) d_large (scene)";
     std::map<std::string, int> group_index;
+    const std::map<std::string, std::string> hidden = hidden_settings(inputs);
     for (const auto& given : inputs) {
         // Realization order, not storage order (a copy only when they differ).
         std::optional<AnalysisPointInput> reordered;
@@ -222,6 +319,7 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
             }
         }
         std::string group = "theta_deg=" + theta_text(p.theta_deg);
+        if (const auto it = hidden.find(in.label); it != hidden.end()) group += it->second;
         p.planned = in.planned;
         p.stored = static_cast<int>(in.results.size());
         for (const auto& [k, v] : label_settings(in.label)) {
@@ -298,6 +396,7 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
         p.rate = stats::summarize(rate);
         p.rate_kg = stats::summarize(rate_kg);
         if (rate.empty()) p.rate.reason = p.rate_kg.reason = "no realization has a discharge rate";
+        p.avalanche = analyze_avalanches(in);
         try {
             p.fields = merge_point_fields(in);
         } catch (const core::StoreError& e) {
@@ -362,6 +461,20 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
             }
         }
         g.jam_rate = stats::fit_jam_rate(Dj, rate, sigma);
+        // <s>(D) through p = 1/<s>, sigma(ln p) = 1/sqrt(r) as for the jam rate.
+        std::vector<double> Ds, ps, ss;
+        for (int i : g.points) {
+            const auto& av = a.points[static_cast<std::size_t>(i)].avalanche;
+            if (av.fit && av.fit->tau && av.fit->sigma_log_tau) {
+                Ds.push_back(a.points[static_cast<std::size_t>(i)].D_cm * cm);
+                ps.push_back(1.0 / *av.fit->tau);
+                ss.push_back(*av.fit->sigma_log_tau);
+            } else {
+                g.avalanche_left_out.emplace_back(a.points[static_cast<std::size_t>(i)].D_cm,
+                                                  av.reason.empty() ? "no jams" : av.reason);
+            }
+        }
+        g.avalanche = stats::fit_jam_rate(Ds, ps, ss);
     }
     return a;
 }
@@ -377,6 +490,98 @@ void opt_field(JsonWriter& w, const std::string& key, const std::optional<double
         w.null();
         w.field(key + "_reason", reason.empty() ? std::string("not computed") : reason);
     }
+}
+
+}  // namespace
+
+namespace {
+
+// The two laws of fit_jam_rate. For avalanches (of_sizes) the fit is of p = 1/<s>, written as
+// <s>: ln_s0 = -ln A, and exponential growth <s> = e^ln_s0 e^(B D), power-law divergence
+// <s> = e^ln_s0 (Dc - D)^-gamma (Zuriguel et al. 2005).
+void write_rate_fits(JsonWriter& w, const stats::JamRateFits& j,
+                     const std::vector<std::pair<double, std::string>>& left_out, bool of_sizes) {
+    w.field("n_points", j.n_points);
+    w.key("left_out").begin_array_inline();
+    for (const auto& [D, why] : left_out) {
+        w.begin_object_inline().field("D_cm", D).field("reason", why).end_object();
+    }
+    w.end_array();
+    const char* lnA = of_sizes ? "ln_s0" : "ln_A";
+    const char* lnA_err = of_sizes ? "ln_s0_err" : "ln_A_err";
+    const double sign = of_sizes ? -1.0 : 1.0;
+    const auto& x = j.exponential;
+    w.key("exponential").begin_object_inline();
+    w.field("valid", x.valid);
+    if (x.valid) {
+        w.field(lnA, sign * x.ln_A).field(lnA_err, x.ln_A_err);
+        w.field("B_per_m", x.B).field("B_err_per_m", x.B_err);
+        w.field("chi2", x.chi2).field("dof", x.dof).field("aic", x.aic);
+    } else {
+        w.field("reason", x.reason);
+    }
+    w.end_object();
+    const auto& pl = j.power_law;
+    w.key("power_law").begin_object_inline();
+    w.field("valid", pl.valid);
+    if (pl.valid) {
+        w.field(lnA, sign * pl.ln_A).field(lnA_err, pl.ln_A_err);
+        w.field("gamma", pl.gamma).field("gamma_err", pl.gamma_err);
+        w.field("Dc_m", pl.Dc).field("Dc_err_m", pl.Dc_err);
+        w.field("chi2", pl.chi2).field("dof", pl.dof).field("aic", pl.aic);
+    } else {
+        w.field("reason", pl.reason);
+    }
+    w.end_object();
+    w.field("preferred", j.preferred);
+    opt_field(w, "delta_aic", j.has_delta_aic ? std::optional<double>(j.delta_aic) : std::nullopt,
+              j.decision);
+    w.field("decision", j.decision);
+}
+
+void write_avalanche(JsonWriter& w, const AvalancheAnalysis& av) {
+    w.key("avalanche").begin_object();
+    w.field("realizations", av.realizations);
+    w.field("realizations_without_sizes", av.realizations_without);
+    const stats::ExponentialFit* f = av.fit ? &*av.fit : nullptr;
+    const std::string why = av.reason.empty() ? "no jams" : av.reason;
+    w.field("n_intervals", f ? f->n_intervals : 0);
+    w.field("n_uncensored", f ? f->n_uncensored : 0);
+    w.field("total_grains", f ? f->total_observed_time : 0.0);
+    opt_field(w, "mean_s_algebraic", f ? f->mean_all : std::nullopt, why);
+    opt_field(w, "mean_s", f ? f->tau : std::nullopt, why);
+    opt_field(w, "mean_s_err",
+              f && f->tau && f->sigma_log_tau ? std::optional<double>(*f->tau * *f->sigma_log_tau)
+                                              : std::nullopt,
+              why);
+    w.key("mean_s_ci95");
+    if (f && f->tau && f->tau_lo && f->tau_hi) {
+        w.begin_array_inline().value(*f->tau_lo).value(*f->tau_hi).end_array();
+        w.field("p_clog_per_grain", 1.0 / *f->tau);
+        w.key("p_clog_ci95").begin_array_inline().value(1.0 / *f->tau_hi).value(1.0 / *f->tau_lo);
+        w.end_array();
+    } else {
+        w.null();
+        w.field("mean_s_ci95_reason", why);
+        w.key("p_clog_per_grain").null();
+        w.field("p_clog_per_grain_reason", why);
+    }
+    opt_field(w, "gof_p", av.gof.valid ? std::optional<double>(av.gof.p_value) : std::nullopt,
+              av.gof.reason);
+    if (av.gof.valid) w.field("gof_statistic", av.gof.statistic);
+    w.key("arches").begin_object_inline();
+    w.field("jams_with_data", av.arch_jams);
+    w.field("found", av.arches_found);
+    w.key("size_counts").begin_object_inline();
+    for (std::size_t n = 1; n < av.arch_size_counts.size(); ++n)
+        if (av.arch_size_counts[n] > 0) w.field(std::to_string(n), av.arch_size_counts[n]);
+    w.end_object();
+    const std::string none = "no arch found";
+    opt_field(w, "mean_size", av.arch_mean_size, none);
+    opt_field(w, "mean_span_m", av.arch_mean_span_m, none);
+    opt_field(w, "mean_max_angle_deg", av.arch_mean_max_angle_deg, none);
+    w.end_object();
+    w.end_object();
 }
 
 }  // namespace
@@ -461,6 +666,7 @@ std::string analysis_json(const Analysis& a, const std::string& store, const std
         opt_field(w, "lr_statistic", e.valid ? std::optional<double>(e.lr_statistic) : std::nullopt,
                   e.reason);
         w.end_object();
+        write_avalanche(w, p.avalanche);
         if (p.fields.enabled) {
             w.key("fields");
             if (const auto& m = p.fields.merged) {
@@ -492,6 +698,16 @@ std::string analysis_json(const Analysis& a, const std::string& store, const std
         const auto& p0 = a.points[static_cast<std::size_t>(g.points.front())];
         w.field("rho_b", p0.rho_b);
         w.field("d", p0.d_mean);
+        w.end_object();
+    }
+    w.end_array();
+
+    w.key("avalanche_fits").begin_array();
+    for (const auto& g : a.groups) {
+        w.begin_object();
+        w.field("theta_deg", g.theta_deg);
+        w.field("group", g.group);
+        write_rate_fits(w, g.avalanche, g.avalanche_left_out, true);
         w.end_object();
     }
     w.end_array();
@@ -764,6 +980,42 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
                per_point(a, [](auto& p) { return p.early_late.rate_early; }));
     c.optional("rate_late", "1/s", "jam rate in the late half",
                per_point(a, [](auto& p) { return p.early_late.rate_late; }));
+    const auto av_tau = [](auto& p) {
+        return p.avalanche.fit ? p.avalanche.fit->tau : std::optional<double>();
+    };
+    c.optional("mean_avalanche", "1", "mean avalanche size <s>: censored MLE grains / jams",
+               per_point(a, av_tau));
+    c.optional("mean_avalanche_err", "1", "standard error of <s>: <s> / sqrt(jams)",
+               per_point(a, [](auto& p) {
+                   const auto& f = p.avalanche.fit;
+                   return f && f->tau && f->sigma_log_tau
+                              ? std::optional<double>(*f->tau * *f->sigma_log_tau)
+                              : std::nullopt;
+               }));
+    c.optional("mean_avalanche_ci95_lo", "1", "95 % chi-square interval of <s>, lower end",
+               per_point(a, [](auto& p) {
+                   const auto& f = p.avalanche.fit;
+                   return f && f->tau ? f->tau_lo : std::nullopt;
+               }));
+    c.optional("mean_avalanche_ci95_hi", "1", "95 % chi-square interval of <s>, upper end",
+               per_point(a, [](auto& p) {
+                   const auto& f = p.avalanche.fit;
+                   return f && f->tau ? f->tau_hi : std::nullopt;
+               }));
+    c.optional("p_clog_per_grain", "1", "clogging probability per grain 1/<s>",
+               per_point(a, [&](auto& p) {
+                   const auto t = av_tau(p);
+                   return t ? std::optional<double>(1.0 / *t) : std::nullopt;
+               }));
+    c.optional(
+        "avalanche_gof_p", "1", "bootstrap KS p-value of the exponential law of s",
+        per_point(a, [](auto& p) { return when(p.avalanche.gof.valid, p.avalanche.gof.p_value); }));
+    c.integer("arches_found", "jams whose arch was found",
+              per_point(a, [](auto& p) { return I(p.avalanche.arches_found); }));
+    c.integer("arch_jams", "jams with arch data",
+              per_point(a, [](auto& p) { return I(p.avalanche.arch_jams); }));
+    c.optional("arch_mean_size", "1", "mean number of disks of the arches found",
+               per_point(a, [](auto& p) { return p.avalanche.arch_mean_size; }));
     c.real("rho_b", "kg/m^2", "2D bulk density used (estimate, see rho_b_source)",
            per_point(a, [](auto& p) { return p.rho_b; }));
     c.real("d", "m", "mean particle diameter (see d_definition)",
@@ -846,7 +1098,46 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
     store::DerivedGroup jr{
         "jam_rate", {{"description", "jam rate 1/tau versus D per group"}}, std::move(j.ds), {}};
 
-    root.groups = {std::move(points), std::move(km), std::move(bev), std::move(jr)};
+    // <s>(D) per group: the fit of p = 1/<s>, written as <s> (ln_s0 = -ln A).
+    Columns v;
+    v.text("group", "theta and other varied settings",
+           per_group(a, [](auto& g) { return g.group; }));
+    v.real("theta_deg", "deg", "wall angle", per_group(a, [](auto& g) { return g.theta_deg; }));
+    v.integer("n_points", "outlets with jams",
+              per_group(a, [](auto& g) { return I(g.avalanche.n_points); }));
+    const auto vex = [&](auto get) {
+        return per_group(a, [&](auto& g) {
+            return when(g.avalanche.exponential.valid, get(g.avalanche.exponential));
+        });
+    };
+    const auto vpw = [&](auto get) {
+        return per_group(a, [&](auto& g) {
+            return when(g.avalanche.power_law.valid, get(g.avalanche.power_law));
+        });
+    };
+    v.optional("exp_ln_s0", "1", "exponential growth <s> = exp(ln_s0 + B D): ln_s0",
+               vex([](auto& f) { return -f.ln_A; }));
+    v.optional("exp_B", "1/m", "exponential growth: B", vex([](auto& f) { return f.B; }));
+    v.optional("exp_B_err", "1/m", "exponential growth: s.e. of B",
+               vex([](auto& f) { return f.B_err; }));
+    v.optional("exp_aic", "1", "exponential growth: AIC", vex([](auto& f) { return f.aic; }));
+    v.optional("pow_ln_s0", "1", "power law <s> = exp(ln_s0) (Dc - D)^-gamma: ln_s0",
+               vpw([](auto& f) { return -f.ln_A; }));
+    v.optional("pow_gamma", "1", "power law: gamma", vpw([](auto& f) { return f.gamma; }));
+    v.optional("pow_gamma_err", "1", "power law: s.e. of gamma",
+               vpw([](auto& f) { return f.gamma_err; }));
+    v.optional("pow_Dc", "m", "power law: critical outlet Dc", vpw([](auto& f) { return f.Dc; }));
+    v.optional("pow_Dc_err", "m", "power law: s.e. of Dc", vpw([](auto& f) { return f.Dc_err; }));
+    v.optional("pow_aic", "1", "power law: AIC", vpw([](auto& f) { return f.aic; }));
+    v.text("preferred", "exponential, power_law or undecided",
+           per_group(a, [](auto& g) { return g.avalanche.preferred; }));
+    v.text("decision", "why", per_group(a, [](auto& g) { return g.avalanche.decision; }));
+    store::DerivedGroup av{"avalanche",
+                           {{"description", "mean avalanche size <s> versus D per group"}},
+                           std::move(v.ds),
+                           {}};
+
+    root.groups = {std::move(points), std::move(km), std::move(bev), std::move(jr), std::move(av)};
     if (auto f = fields_group(a)) root.groups.push_back(std::move(*f));
     return root;
 }
@@ -861,6 +1152,55 @@ std::string num(const std::optional<double>& v, const char* f = "%.4g") {
 std::string p_text(double p) {
     if (p < 0.001) return "<0.001";
     return fmt(p < 0.1 ? "%.2g" : "%.2f", p);
+}
+
+}  // namespace
+
+namespace {
+
+void write_avalanche_text(std::ostream& out, const Analysis& a, std::size_t width) {
+    char buf[1024];
+    out << "avalanches per point (s: grains that crossed the outlet per survival interval; <s>: "
+           "censored MLE = grains / jams, +- its standard error <s>/sqrt(jams), 95 % CI; p: "
+           "clogging probability per grain 1/<s>; gof p: exponential law of s; arches: found / "
+           "jams, mean disks)\n";
+    std::snprintf(buf, sizeof buf, "%-*s  %26s  %10s  %6s  %14s\n", static_cast<int>(width),
+                  "point", "<s> +- se [95% CI]", "p", "gof p", "arches");
+    out << buf;
+    for (const auto& p : a.points) {
+        const auto& av = p.avalanche;
+        std::string s = av.reason.empty() ? "-" : av.reason;
+        std::string pc = "-";
+        if (av.fit && av.fit->tau && av.fit->tau_lo && av.fit->tau_hi && av.fit->sigma_log_tau) {
+            s = fmt("%.4g", *av.fit->tau) + " +- " +
+                fmt("%.2g", *av.fit->tau * *av.fit->sigma_log_tau) + " [" +
+                fmt("%.3g", *av.fit->tau_lo) + ", " + fmt("%.3g", *av.fit->tau_hi) + "]";
+            pc = fmt("%.3g", 1.0 / *av.fit->tau);
+        }
+        const std::string arches =
+            std::to_string(av.arches_found) + "/" + std::to_string(av.arch_jams) +
+            (av.arch_mean_size ? ", " + fmt("%.2f", *av.arch_mean_size) : std::string());
+        std::snprintf(buf, sizeof buf, "%-*s  %26s  %10s  %6s  %14s\n", static_cast<int>(width),
+                      p.label.c_str(), s.c_str(), pc.c_str(),
+                      av.gof.valid ? p_text(av.gof.p_value).c_str() : "-", arches.c_str());
+        out << buf;
+    }
+    out << "mean avalanche size <s> versus D (exponential growth vs power-law divergence "
+           "<s> = A (Dc - D)^-gamma)\n";
+    for (const auto& g : a.groups) {
+        const auto& j = g.avalanche;
+        out << "  " << g.group << ": " << j.n_points << " outlet(s) with jams";
+        if (!g.avalanche_left_out.empty())
+            out << ", " << g.avalanche_left_out.size() << " left out";
+        out << "; exponential: "
+            << (j.exponential.valid ? "B = " + fmt("%.4g", j.exponential.B) + " 1/m"
+                                    : j.exponential.reason)
+            << "; power law: "
+            << (j.power_law.valid ? "gamma = " + fmt("%.3g", j.power_law.gamma) +
+                                        ", Dc = " + fmt("%.4g", j.power_law.Dc) + " m"
+                                  : j.power_law.reason)
+            << "; preferred: " << j.preferred << " (" << j.decision << ")\n";
+    }
 }
 
 }  // namespace
@@ -929,6 +1269,7 @@ void write_analysis(std::ostream& out, const Analysis& a) {
                                   : j.power_law.reason)
             << "; preferred: " << j.preferred << " (" << j.decision << ")\n";
     }
+    write_avalanche_text(out, a, width);
     if (std::none_of(a.points.begin(), a.points.end(),
                      [](const PointAnalysis& p) { return p.fields.enabled; }))
         return;

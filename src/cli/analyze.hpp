@@ -68,6 +68,21 @@ struct PointFields {
 // the point and the rows when two pieces have different grids.
 PointFields merge_point_fields(const AnalysisPointInput& in);
 
+// Avalanche sizes and arches of one point (issue 13; docs/statistics.md, "Avalanches").
+struct AvalancheAnalysis {
+    int realizations = 0;          // used realizations with avalanche sizes
+    int realizations_without = 0;  // used realizations stored before avalanche sizes existed
+    // The censored exponential fit on the sizes: tau is <s> (grains per avalanche), T the
+    // grains that passed, r the jams; 1/<s> is the clogging probability per grain.
+    std::optional<stats::ExponentialFit> fit;
+    std::string reason;  // why fit or <s> is missing
+    stats::GofResult gof;
+    int arch_jams = 0;                           // jams with arch data
+    int arches_found = 0;                        // of them, with an arch
+    std::vector<std::int64_t> arch_size_counts;  // [n]: arches of n disks
+    std::optional<double> arch_mean_size, arch_mean_span_m, arch_mean_max_angle_deg;
+};
+
 struct PointAnalysis {
     std::string label;
     double D_cm = 0.0, theta_deg = 0.0;
@@ -86,6 +101,7 @@ struct PointAnalysis {
     stats::SampleSummary empty_time, rate, rate_kg;
     double rho_b = 0.0, d_mean = 0.0;  // kg/m^2 (estimate), m
     PointFields fields;
+    AvalancheAnalysis avalanche;
 };
 
 struct GroupAnalysis {
@@ -95,6 +111,10 @@ struct GroupAnalysis {
     stats::BeverlooFit beverloo;
     stats::JamRateFits jam_rate;
     std::vector<std::pair<double, std::string>> jam_rate_left_out;  // D_cm, reason
+    // <s>(D): fitted as the clogging probability per grain p = 1/<s> with the jam-rate laws, so
+    // exponential: <s> = exp(-ln A) exp(B D); power law: <s> = exp(-ln A) (Dc - D)^-gamma.
+    stats::JamRateFits avalanche;
+    std::vector<std::pair<double, std::string>> avalanche_left_out;  // D_cm, reason
 };
 
 struct Analysis {

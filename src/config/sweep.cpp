@@ -225,6 +225,13 @@ const std::array key_table = {
            [](P& p, V v) { p.protocol.sample_interval = num(v); }},
     KeyDef{"protocol", "max_overlap", "protocol.max_overlap", Kind::real, 0, 1, open, closed, "d_small",
            [](P& p, V v) { p.protocol.max_overlap = num(v); }},
+    KeyDef{"protocol", "mode", "protocol.mode", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               using M = engine::ProtocolMode;
+               p.protocol.mode = choice_of(v, {M::published, M::steady_state});
+           }, "published,steady_state"},
+    KeyDef{"protocol", "jams_per_realization", "protocol.jams_per_realization", Kind::integer, 0, 1e7, closed, closed, "",
+           [](P& p, V v) { p.protocol.jams_per_realization = static_cast<int>(num(v)); }},
     // [fields]: coarse-grained velocity and pressure fields of the discharge (off by default)
     KeyDef{"fields", "enabled", "fields.enabled", Kind::boolean, 0, 0, closed, closed, "",
            [](P& p, V v) { p.fields.enabled = std::get<std::string>(v) == "true"; }},
@@ -250,7 +257,14 @@ const std::array key_table = {
 
 constexpr std::array<std::string_view, 6> scene_sections = {"hopper",     "material", "walls",
                                                             "integrator", "protocol", "fields"};
-constexpr std::array<std::string_view, 4> campaign_keys = {"name", "store", "seed", "realizations"};
+constexpr std::array<std::string_view, 8> campaign_keys = {"name",
+                                                           "store",
+                                                           "seed",
+                                                           "realizations",
+                                                           "target",
+                                                           "target_rel_ci",
+                                                           "max_realizations",
+                                                           "round_realizations"};
 
 bool is_scene_section(std::string_view s) {
     return std::find(scene_sections.begin(), scene_sections.end(), s) != scene_sections.end();
@@ -626,6 +640,7 @@ void Parser::read_campaign(const toml::node& node, SweepFile& out) const {
     CampaignSpec& c = out.campaign;
     c.seed = 1;
     c.realizations = 1;
+    bool target_given = false;
     for (auto&& [k, v] : *tbl) {
         const std::string key(k.str());
         if (key == "name") {
@@ -665,6 +680,30 @@ void Parser::read_campaign(const toml::node& node, SweepFile& out) const {
             c.seed = static_cast<std::uint64_t>(i->get());
         } else if (key == "realizations") {
             c.realizations = *read_realizations(v, "campaign.realizations");
+        } else if (key == "target") {
+            auto s = v.as_string();
+            if (!s || (s->get() != "tau" && s->get() != "mean_s"))
+                fail(v.source(), "campaign.target = " + node_text(v) +
+                                     " is not allowed: use \"tau\" (mean survival time) or "
+                                     "\"mean_s\" (mean avalanche size)");
+            if (!c.target) c.target.emplace();
+            c.target->quantity = s->get() == "tau" ? CampaignTarget::Quantity::tau
+                                                   : CampaignTarget::Quantity::mean_s;
+            target_given = true;
+        } else if (key == "target_rel_ci") {
+            const auto x = v.value<double>();
+            if (!x || !(*x > 0.0 && *x <= 1.0))
+                fail(v.source(), "campaign.target_rel_ci = " + node_text(v) +
+                                     " is out of range: allowed (0, 1] (the relative half-width "
+                                     "of the 95 % interval, e.g. 0.1)");
+            if (!c.target) c.target.emplace();
+            c.target->rel_half_width = *x;
+        } else if (key == "max_realizations") {
+            if (!c.target) c.target.emplace();
+            c.target->max_realizations = *read_realizations(v, "campaign.max_realizations");
+        } else if (key == "round_realizations") {
+            if (!c.target) c.target.emplace();
+            c.target->round = *read_realizations(v, "campaign.round_realizations");
         } else {
             std::vector<std::string> allowed(campaign_keys.begin(), campaign_keys.end());
             fail(k.source(), "unknown key '" + clip(key) + "' in [campaign]; allowed: " +
@@ -672,6 +711,15 @@ void Parser::read_campaign(const toml::node& node, SweepFile& out) const {
         }
     }
     if (c.name.empty()) fail(node.source(), "[campaign] needs a name, e.g. name = \"survival\"");
+    if (c.target && !target_given)
+        fail(node.source(),
+             "[campaign] target_rel_ci, max_realizations and round_realizations need "
+             "target = \"tau\" or \"mean_s\" (a campaign that stops when good enough)");
+    if (c.target && c.target->round == 0) c.target->round = c.realizations;
+    if (c.target && c.target->max_realizations == 0)
+        fail(node.source(),
+             "[campaign] target needs max_realizations (the most realizations a "
+             "point may get), e.g. max_realizations = 100");
     const fs::path dir = path_.parent_path();
     if (c.store.empty()) c.store = c.name + ".h5";
     if (c.store.is_relative()) c.store = dir / c.store;
@@ -987,6 +1035,18 @@ SweepFile Parser::run() {
     long long tasks = 0;
     for (const auto& d : drafts) {
         Point pt = make_point(d, out.campaign.realizations);
+        if (const auto& t = out.campaign.target) {
+            // Rounds: the point's realizations are the first round; the plan holds
+            // max_realizations (their seeds are fixed by the index, so the set run stays
+            // deterministic whatever the rounds decide).
+            if (pt.realizations > t->max_realizations)
+                fail("point '" + pt.label + "' (" + d.origin + ") has " +
+                     std::to_string(pt.realizations) +
+                     " realizations in its first round, more than campaign.max_realizations = " +
+                     std::to_string(t->max_realizations) + "; allowed: at most max_realizations");
+            pt.first_round = pt.realizations;
+            pt.realizations = t->max_realizations;
+        }
         if (auto [it, fresh] = seen.emplace(pt.label, d.origin); !fresh)
             fail("duplicate point '" + pt.label + "': " + it->second + " and " + d.origin +
                  " have the same settings (to run a point more often, raise its realizations)");
@@ -1048,6 +1108,10 @@ engine::SceneParams scene_at(const SweepFile& sweep, double D_cm, double theta_d
         throw ConfigError(file + ": " + e.what());
     }
     return p;
+}
+
+std::string to_string(CampaignTarget::Quantity q) {
+    return q == CampaignTarget::Quantity::tau ? "tau" : "mean_s";
 }
 
 std::string to_string(const ParamSetting& setting) {

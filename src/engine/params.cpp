@@ -41,6 +41,10 @@ std::string to_string(NormalDamping d) {
     return d == NormalDamping::nominal ? "nominal" : "exact_restitution";
 }
 
+std::string to_string(ProtocolMode m) {
+    return m == ProtocolMode::published ? "published" : "steady_state";
+}
+
 namespace {
 
 // Rejects value unless lo <= value <= hi (or lo < value when open_lo), naming the parameter.
@@ -158,6 +162,15 @@ void validate_scene(const SceneParams& p) {
             " is out of range: allowed [0, " + std::to_string(s.count - 1) + "]");
     require_range("protocol.sample_interval", pr.sample_interval, 0.0, 1e3, true, " s");
     require_range("protocol.max_overlap", pr.max_overlap, 0.0, 1.0, true);
+    if (pr.jams_per_realization < 0 || pr.jams_per_realization > 10000000)
+        throw ConfigError(
+            "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
+            " is out of range: allowed [0, 10000000]");
+    if (pr.mode == ProtocolMode::published && pr.jams_per_realization != 0)
+        throw ConfigError(
+            "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
+            " needs protocol.mode = steady_state (the published protocol runs "
+            "until the hopper is empty); allowed with mode = published: 0");
 }
 
 double hertz_collision_time(double m, double d, double youngs_modulus, double poisson_ratio,

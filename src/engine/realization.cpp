@@ -8,6 +8,7 @@
 
 #include "hopper/core/error.hpp"
 #include "hopper/core/random.hpp"
+#include "hopper/engine/arch.hpp"
 #include "hopper/engine/fields.hpp"
 #include "hopper/engine/scene.hpp"
 #include "hopper/engine/system.hpp"
@@ -121,6 +122,13 @@ struct Realization::Impl {
     std::unique_ptr<System> sys;
     std::vector<int> gate_ids;
     std::vector<double> mass_of_id;  // by particle id (walls: 0)
+    // The realization's generator: the fill, then (steady state) the re-inserted positions.
+    core::Rng rng;
+    std::vector<double> diameter_of_id, inertia_of_id;  // by particle id (walls: 0)
+    // Particles that had left (crossed the outlet plane) when the current avalanche began: at
+    // the opening, then at each jam's detection.
+    int interval_base = 0;
+    double insert_base = 0.0;  // steady state: the settled packing's top at the opening
     Phase phase = Phase::settle;
     Flow flow = Flow::flowing;
     Clock::time_point wall_start;
@@ -151,7 +159,7 @@ struct Realization::Impl {
     double y_region = 0.0, y_outlet = 0.0, half_gap = 0.0;
 
     Impl(const SceneParams& params, std::uint64_t seed, RunHooks h)
-        : p(params), hooks(std::move(h)), wall_start(Clock::now()) {
+        : p(params), hooks(std::move(h)), rng(seed), wall_start(Clock::now()) {
         validate_scene(p);
         c = derive_constants(p);
         res.seed = seed;
@@ -159,7 +167,6 @@ struct Realization::Impl {
         res.diagnostics.dt = c.dt;
         res.diagnostics.tau_c = c.tau_c;
         res.diagnostics.k_n = c.k_n;
-        core::Rng rng(seed);
         const SceneLayout layout = build_scene(p, rng);
         sys = std::make_unique<System>(system_config(p, c, hooks.kernel));
         for (const auto& w : layout.walls)
@@ -170,8 +177,7 @@ struct Realization::Impl {
             const double m = f.large ? c.m_large : c.m_small;
             const double I = f.large ? c.I_large : c.I_small;
             const int id = sys->add_particle(f.pos, f.diameter, m, I, f.vel, 0.0);
-            if (int(mass_of_id.size()) <= id) mass_of_id.resize(id + 1, 0.0);
-            mass_of_id[id] = m;
+            remember(id, m, f.diameter, I);
         }
         res.wall_particles = sys->wall_count() - int(gate_ids.size());
         k_detect = every(p.protocol.detector_interval, c.dt);
@@ -191,6 +197,85 @@ struct Realization::Impl {
     }
 
     bool ended() const { return flow == Flow::ended; }
+
+    void remember(int id, double m, double diameter, double inertia) {
+        if (int(mass_of_id.size()) <= id) {
+            mass_of_id.resize(std::size_t(id) + 1, 0.0);
+            diameter_of_id.resize(std::size_t(id) + 1, 0.0);
+            inertia_of_id.resize(std::size_t(id) + 1, 0.0);
+        }
+        mass_of_id[id] = m;
+        diameter_of_id[id] = diameter;
+        inertia_of_id[id] = inertia;
+    }
+
+    // Particles that have crossed the outlet plane: those removed plus those still falling.
+    int left_count() const {
+        int n = res.discharged;
+        for (double y : sys->y())
+            n += y < y_outlet ? 1 : 0;
+        return n;
+    }
+
+    // The arch over the outlet now (arch.hpp), from the disks near the outlet.
+    Arch current_arch() const {
+        const double reach = 2.0 * half_gap + 6.0 * p.particles.d_large;
+        const auto near = [&](double x, double y) {
+            return x * x + (y - y_outlet) * (y - y_outlet) < reach * reach;
+        };
+        std::vector<ArchDisk> disks;
+        const auto x = sys->x(), y = sys->y(), r = sys->r();
+        const auto ids = sys->ids();
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (near(x[i], y[i])) disks.push_back({ids[i], x[i], y[i], r[i], false});
+        const auto wx = sys->wall_x(), wy = sys->wall_y(), wr = sys->wall_r();
+        const auto wid = sys->wall_ids();
+        const Vec2 off = sys->wall_offset();
+        for (std::size_t i = 0; i < wx.size(); ++i)
+            if (near(wx[i] + off.x(), wy[i] + off.y()))
+                disks.push_back({wid[i], wx[i] + off.x(), wy[i] + off.y(), wr[i], true});
+        return find_arch(disks, y_region);
+    }
+
+    // Steady state: each particle that left comes back at the top of the packing, at a
+    // position drawn from the realization's generator where it overlaps nothing: x across the
+    // container, y in a band from half a large diameter to three above the settled packing's
+    // top (measured at the opening; the head stays there as the count is constant). Measuring
+    // the top anew would follow particles still falling from earlier insertions upward.
+    void reinsert(int id) {
+        const double d = diameter_of_id[id], rad = 0.5 * d;
+        const double top = insert_base;
+        const double half_w = 0.5 * p.hopper.width - 1.01 * rad;
+        const Vec2 off = sys->wall_offset();
+        const auto overlaps = [&](const Vec2& q) {
+            const auto x = sys->x(), y = sys->y(), r = sys->r();
+            for (std::size_t i = 0; i < x.size(); ++i) {
+                const double dx = x[i] - q.x(), dy = y[i] - q.y(), s = r[i] + rad;
+                if (dx * dx + dy * dy < s * s) return true;
+            }
+            const auto wx = sys->wall_x(), wy = sys->wall_y(), wr = sys->wall_r();
+            for (std::size_t i = 0; i < wx.size(); ++i) {
+                const double dx = wx[i] + off.x() - q.x(), dy = wy[i] + off.y() - q.y();
+                const double s = wr[i] + rad;
+                if (dx * dx + dy * dy < s * s) return true;
+            }
+            return false;
+        };
+        for (int attempt = 0; attempt < 2000; ++attempt) {
+            // The band widens by a large diameter for every 200 failed draws.
+            const double band = 2.5 + attempt / 200;
+            const double lift = rng.uniform(0.5, 0.5 + band) * p.particles.d_large;
+            const Vec2 q(rng.uniform(-half_w, half_w), top + rad + lift);
+            if (overlaps(q)) continue;
+            const int nid =
+                sys->add_particle(q, d, mass_of_id[id], inertia_of_id[id], Vec2::Zero(), 0.0);
+            remember(nid, mass_of_id[id], d, inertia_of_id[id]);
+            return;
+        }
+        throw core::SimulationError(
+            "steady state: no free place found above the packing to re-insert a particle in "
+            "2000 draws; widen the hopper or lower hopper.particles");
+    }
 
     void fail(const std::string& why) {
         res.status = Status::failed;
@@ -296,6 +381,13 @@ struct Realization::Impl {
         phase = Phase::discharge;
         flow = Flow::flowing;
         td = flow_start = last_occupied = 0.0;
+        interval_base = left_count();
+        insert_base = y_outlet;
+        {
+            const auto y = sys->y(), r = sys->r();
+            for (std::size_t i = 0; i < y.size(); ++i)
+                insert_base = std::max(insert_base, y[i] + r[i]);
+        }
         log(Event::Kind::opened);
         sample();
         if (p.fields.enabled) start_fields();
@@ -393,6 +485,7 @@ struct Realization::Impl {
             res.exit_times.push_back(td);
             exit_mass.push_back(mass_of_id[r.id]);
             ++res.discharged;
+            if (p.protocol.mode == ProtocolMode::steady_state) reinsert(r.id);
         }
     }
 
@@ -412,7 +505,19 @@ struct Realization::Impl {
                     res.events.push_back(
                         {Event::Kind::jam, last_occupied, sys->time(), sys->mobile_count()});
                     jammed.emplace_back(last_occupied, td);
+                    {
+                        // The next interval's avalanche starts here: particles that fall while
+                        // shaking belong to the flow the shake restarts.
+                        const int left = left_count();
+                        res.avalanche_sizes.push_back(left - interval_base);
+                        interval_base = left;
+                    }
+                    res.arches.push_back(current_arch());
                     shakes_this_jam = 0;
+                    if (p.protocol.mode == ProtocolMode::steady_state &&
+                        p.protocol.jams_per_realization > 0 &&
+                        res.n_jams >= p.protocol.jams_per_realization)
+                        return enough_jams();
                     if (p.protocol.max_shakes == 0) return arrest();
                     start_shake();
                 }
@@ -448,6 +553,16 @@ struct Realization::Impl {
         end_run(Event::Kind::stop);
     }
 
+    // Steady state: the realization asked for this many jams and has them.
+    void enough_jams() {
+        res.status = Status::complete;
+        std::ostringstream msg;
+        msg << "steady state: " << res.n_jams << " jams (protocol.jams_per_realization) observed";
+        res.message = msg.str();
+        jammed.back().second = td;
+        end_run(Event::Kind::stop);
+    }
+
     void finish_shake() {
         sys->set_wall_motion(Vec2::Zero(), Vec2::Zero());
         res.shakes_per_jam.back() = shakes_this_jam;
@@ -462,6 +577,7 @@ struct Realization::Impl {
         if (flow != Flow::flowing) return;
         res.survival_times.push_back(std::max(0.0, t_end - flow_start));
         res.censored.push_back(true);
+        res.avalanche_sizes.push_back(left_count() - interval_base);
     }
 
     bool advance(double seconds) {

@@ -295,11 +295,57 @@ engine::FieldMoments decode_fields(ByteReader& in) {
     return m;
 }
 
+void encode_science(ByteWriter& w, const engine::RealizationResult& r) {
+    w.i32s(r.avalanche_sizes);
+    w.u32(static_cast<std::uint32_t>(r.arches.size()));
+    for (const engine::Arch& a : r.arches) {
+        w.i32s(a.ids);
+        w.f64s(a.x);
+        w.f64s(a.y);
+        w.f64(a.span);
+        w.f64(a.max_angle);
+    }
+}
+
+void decode_science(ByteReader& in, engine::RealizationResult& r) {
+    r.avalanche_sizes = in.i32s();
+    if (r.avalanche_sizes.size() != r.survival_times.size())
+        in.fail("avalanche sizes: " + std::to_string(r.avalanche_sizes.size()) + " values for " +
+                std::to_string(r.survival_times.size()) + " survival intervals");
+    for (int s : r.avalanche_sizes)
+        if (s < 0) in.fail("avalanche sizes: a negative size " + std::to_string(s));
+    const std::uint32_t n = in.u32();
+    if (n != r.jam_onsets.size())
+        in.fail("arches: " + std::to_string(n) + " arches for " +
+                std::to_string(r.jam_onsets.size()) + " jams");
+    r.arches.resize(n);
+    for (engine::Arch& a : r.arches) {
+        a.ids = in.i32s();
+        a.x = in.f64s();
+        a.y = in.f64s();
+        if (a.x.size() != a.ids.size() || a.y.size() != a.ids.size())
+            in.fail("arches: " + std::to_string(a.ids.size()) + " disk ids with " +
+                    std::to_string(a.x.size()) + " x and " + std::to_string(a.y.size()) +
+                    " y positions");
+        a.span = in.f64();
+        a.max_angle = in.f64();
+        for (double v : a.x)
+            if (!std::isfinite(v)) in.fail("arches: a non-finite position");
+        for (double v : a.y)
+            if (!std::isfinite(v)) in.fail("arches: a non-finite position");
+        if (!std::isfinite(a.span) || !std::isfinite(a.max_angle) || a.span < 0.0 ||
+            a.max_angle < 0.0)
+            in.fail("arches: a span or angle that is negative or not finite");
+    }
+}
+
 }  // namespace
 
 void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
-    const std::uint16_t version =
-        r.fields ? result_codec_version : result_codec_version_without_fields;
+    const bool science = !r.avalanche_sizes.empty() || !r.arches.empty();
+    const std::uint16_t version = science    ? result_codec_version
+                                  : r.fields ? result_codec_version_fields
+                                             : result_codec_version_without_fields;
     w.u32(result_magic);
     w.u8(static_cast<std::uint8_t>(version & 0xff));
     w.u8(static_cast<std::uint8_t>(version >> 8));
@@ -340,7 +386,13 @@ void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
           d.settled_kinetic_energy, d.potential_energy_released, d.dt, d.tau_c, d.k_n,
           d.seconds_forces, d.seconds_integration, d.seconds_neighbors, d.seconds_observers})
         w.f64(v);
-    if (r.fields) encode_fields(w, *r.fields);
+    if (version == result_codec_version) {
+        w.u8(r.fields ? 1 : 0);
+        if (r.fields) encode_fields(w, *r.fields);
+        encode_science(w, r);
+    } else if (r.fields) {
+        encode_fields(w, *r.fields);
+    }
 }
 
 Bytes encode_result(const engine::RealizationResult& r) {
@@ -352,10 +404,10 @@ Bytes encode_result(const engine::RealizationResult& r) {
 engine::RealizationResult decode_result(ByteReader& in) {
     if (in.u32() != result_magic) in.fail("not an encoded realization result (bad magic)");
     const std::uint16_t version = static_cast<std::uint16_t>(in.u8() | (in.u8() << 8));
-    if (version != result_codec_version && version != result_codec_version_without_fields)
+    if (version < result_codec_version_without_fields || version > result_codec_version)
         in.fail("result encoding version " + std::to_string(version) + " is not supported (this " +
                 "build reads versions " + std::to_string(result_codec_version_without_fields) +
-                " and " + std::to_string(result_codec_version) + ")");
+                " to " + std::to_string(result_codec_version) + ")");
     engine::RealizationResult r;
     const std::uint8_t status = in.u8();
     if (status > static_cast<std::uint8_t>(engine::Status::failed))
@@ -405,7 +457,13 @@ engine::RealizationResult decode_result(ByteReader& in) {
                       &d.dt, &d.tau_c, &d.k_n, &d.seconds_forces, &d.seconds_integration,
                       &d.seconds_neighbors, &d.seconds_observers})
         *v = in.f64();
-    if (version >= 2) r.fields = decode_fields(in);
+    if (version == result_codec_version_fields) r.fields = decode_fields(in);
+    if (version == result_codec_version) {
+        const std::uint8_t has_fields = in.u8();
+        if (has_fields > 1) in.fail("a fields flag of " + std::to_string(has_fields));
+        if (has_fields) r.fields = decode_fields(in);
+        decode_science(in, r);
+    }
     return r;
 }
 

@@ -187,6 +187,19 @@ const std::vector<Family>& families() {
          [](const engine::RealizationResult& r) { return r.curve_time.size(); }},
         {"event", "event log (event_kind, event_time, event_sim_time, event_in_hopper)",
          [](const engine::RealizationResult& r) { return r.events.size(); }},
+        // Issue 13: absent from files written before (read_realizations reads such files with
+        // none; the writer rebuilds them from the journal).
+        {"arch", "arches, one per jam (arch_disks, arch_span, arch_max_angle)",
+         [](const engine::RealizationResult& r) { return r.arches.size(); }},
+        {"arch_disk",
+         "the arches' disks, all arches of the realization in jam order (arch_disk_id, "
+         "arch_disk_x, arch_disk_y)",
+         [](const engine::RealizationResult& r) {
+             std::size_t n = 0;
+             for (const auto& a : r.arches)
+                 n += a.ids.size();
+             return n;
+         }},
     };
     return f;
 }
@@ -262,6 +275,37 @@ ColumnDef ragged(std::string name, Kind kind, int family, std::string units,
                 throw core::StoreError("a ragged index points past the end of its dataset");
             set(o.result, v.data() + at, n);
         }};
+}
+
+// A column of the arch_disk family: the disks of all arches of a realization in jam order. Its
+// pull runs after arch_disks has sized each arch.
+template <class T>
+ColumnDef arch_disk_column(std::string name, Kind kind, std::string units, std::string description,
+                           std::function<T(const engine::Arch&, std::size_t)> get,
+                           std::function<void(engine::Arch&, std::size_t, T)> set) {
+    return ragged<T>(
+        std::move(name), kind, 6, std::move(units), std::move(description),
+        [get](std::vector<T>& v, const engine::RealizationResult& r) {
+            for (const auto& a : r.arches)
+                for (std::size_t k = 0; k < a.ids.size(); ++k)
+                    v.push_back(get(a, k));
+        },
+        [set](engine::RealizationResult& r, const T* p, std::size_t n) {
+            std::size_t total = 0;
+            for (const auto& a : r.arches)
+                total += a.ids.size();
+            if (total != n)
+                throw core::StoreError("the store's arch disks (" + std::to_string(n) +
+                                       ") do not add up to its arch sizes (" +
+                                       std::to_string(total) + ")");
+            std::size_t at = 0;
+            for (auto& a : r.arches) {
+                a.x.resize(a.ids.size());
+                a.y.resize(a.ids.size());
+                for (std::size_t k = 0; k < a.ids.size(); ++k)
+                    set(a, k, p[at++]);
+            }
+        });
 }
 
 std::vector<double> to_f64(const double* p, std::size_t n) {
@@ -517,6 +561,84 @@ const std::vector<ColumnDef>& columns() {
                 r.events.resize(n);
                 for (std::size_t i = 0; i < n; ++i)
                     r.events[i].in_hopper = p[i];
+            }),
+        // Issue 13: avalanche sizes and arches (absent in files written before; such files are
+        // read with none).
+        ragged<std::int32_t>(
+            "avalanche_size", Kind::i32, 0, "1",
+            "particles that crossed the outlet plane during each survival interval (0 when "
+            "has_avalanche_sizes is false)",
+            [](std::vector<std::int32_t>& v, const R& r) {
+                for (std::size_t i = 0; i < r.survival_times.size(); ++i)
+                    v.push_back(i < r.avalanche_sizes.size() ? r.avalanche_sizes[i] : 0);
+            },
+            [](R& r, const std::int32_t* p, std::size_t n) { r.avalanche_sizes = to_int(p, n); }),
+        ragged<std::int32_t>(
+            "arch_disks", Kind::i32, 5, "1",
+            "disks in the arch of each jam (0: no arch found); its disks are the next "
+            "arch_disks values of the arch_disk family",
+            [](std::vector<std::int32_t>& v, const R& r) {
+                for (const auto& a : r.arches)
+                    v.push_back(static_cast<std::int32_t>(a.ids.size()));
+            },
+            [](R& r, const std::int32_t* p, std::size_t n) {
+                r.arches.assign(n, {});
+                for (std::size_t i = 0; i < n; ++i) {
+                    if (p[i] < 0) throw core::StoreError("a negative arch size in the store");
+                    r.arches[i].ids.assign(static_cast<std::size_t>(p[i]), -1);
+                }
+            }),
+        ragged<double>(
+            "arch_span", Kind::f64, 5, "m",
+            "distance between the arch's contact points with the two walls (0: no arch)",
+            [](std::vector<double>& v, const R& r) {
+                for (const auto& a : r.arches)
+                    v.push_back(fin(a.span));
+            },
+            [](R& r, const double* p, std::size_t n) {
+                r.arches.resize(n);
+                for (std::size_t i = 0; i < n; ++i)
+                    r.arches[i].span = p[i];
+            }),
+        ragged<double>(
+            "arch_max_angle", Kind::f64, 5, "rad",
+            "largest angle between consecutive bonds of the arch, measured through the outlet "
+            "side (pi: straight; 0: no arch)",
+            [](std::vector<double>& v, const R& r) {
+                for (const auto& a : r.arches)
+                    v.push_back(fin(a.max_angle));
+            },
+            [](R& r, const double* p, std::size_t n) {
+                r.arches.resize(n);
+                for (std::size_t i = 0; i < n; ++i)
+                    r.arches[i].max_angle = p[i];
+            }),
+        arch_disk_column<std::int32_t>(
+            "arch_disk_id", Kind::i32, "1", "particle id of each arch disk, left to right",
+            [](const engine::Arch& a, std::size_t k) { return a.ids[k]; },
+            [](engine::Arch& a, std::size_t k, std::int32_t v) { a.ids[k] = v; }),
+        arch_disk_column<double>(
+            "arch_disk_x", Kind::f64, "m", "x of each arch disk's centre when the jam was detected",
+            [](const engine::Arch& a, std::size_t k) { return fin(a.x[k]); },
+            [](engine::Arch& a, std::size_t k, double v) { a.x[k] = v; }),
+        arch_disk_column<double>(
+            "arch_disk_y", Kind::f64, "m", "y of each arch disk's centre when the jam was detected",
+            [](const engine::Arch& a, std::size_t k) { return fin(a.y[k]); },
+            [](engine::Arch& a, std::size_t k, double v) { a.y[k] = v; }),
+        // Last, so that its pull sees the avalanche sizes and arches read above.
+        row<std::int8_t>(
+            G, "has_avalanche_sizes", Kind::boolean, "1",
+            "whether the realization recorded avalanche sizes and arches (false for results "
+            "stored before they existed)",
+            [](const Src& s) {
+                return static_cast<std::int8_t>(
+                    !s.r.avalanche_sizes.empty() || !s.r.arches.empty() ? 1 : 0);
+            },
+            [](StoredRealization& o, std::int8_t v) {
+                if (!v) {
+                    o.result.avalanche_sizes.clear();
+                    o.result.arches.clear();
+                }
             }),
     };
     return c;
@@ -1311,29 +1433,46 @@ std::vector<StoredRealization> read_realizations(const fs::path& path) {
     h5::Id g_diag = h5::open_group(g_real, "diagnostics");
     h5::Id g_ragged = h5::open_group(file, "ragged");
     std::vector<Buffer> bufs;
+    // Columns added later (issue 13: avalanche sizes, arches) are absent from older files:
+    // their realizations are read without them.
+    std::vector<bool> present;
     for (const ColumnDef& d : columns()) {
         const h5::Id& g = d.group == "realizations" ? g_real
                           : d.group == "ragged"     ? g_ragged
                                                     : g_diag;
-        bufs.push_back(
-            read_buffer(h5::open_dataset(g, d.name), types, d.kind, "/" + d.group + "/" + d.name));
+        present.push_back(h5::exists(g, d.name));
+        bufs.push_back(present.back() ? read_buffer(h5::open_dataset(g, d.name), types, d.kind,
+                                                    "/" + d.group + "/" + d.name)
+                                      : make_buffer(d.kind));
     }
     std::vector<std::vector<std::int64_t>> starts;
     std::vector<std::vector<std::int32_t>> lengths;
+    std::vector<bool> family_present;
     for (const Family& f : families()) {
-        starts.push_back(as<std::int64_t>(read_buffer(
-            h5::open_dataset(g_real, std::string(f.name) + "_start"), types, Kind::i64, f.name)));
+        const std::string start = std::string(f.name) + "_start";
+        family_present.push_back(h5::exists(g_real, start));
+        if (!family_present.back()) {
+            starts.emplace_back();
+            lengths.emplace_back();
+            continue;
+        }
+        starts.push_back(as<std::int64_t>(
+            read_buffer(h5::open_dataset(g_real, start), types, Kind::i64, f.name)));
         lengths.push_back(as<std::int32_t>(read_buffer(
             h5::open_dataset(g_real, std::string(f.name) + "_length"), types, Kind::i32, f.name)));
     }
+    for (std::size_t i = 0; i < columns().size(); ++i)
+        if (columns()[i].family >= 0 &&
+            !family_present[static_cast<std::size_t>(columns()[i].family)])
+            present[i] = false;
     const std::size_t rows = size_of(bufs.front());
     for (std::size_t i = 0; i < columns().size(); ++i)
-        if (columns()[i].family < 0 && size_of(bufs[i]) != rows)
+        if (present[i] && columns()[i].family < 0 && size_of(bufs[i]) != rows)
             throw core::StoreError("store '" + path.string() + "': /realizations/" +
                                    columns()[i].name + " has " + std::to_string(size_of(bufs[i])) +
                                    " rows, expected " + std::to_string(rows));
     for (std::size_t f = 0; f < families().size(); ++f)
-        if (starts[f].size() != rows || lengths[f].size() != rows)
+        if (family_present[f] && (starts[f].size() != rows || lengths[f].size() != rows))
             throw core::StoreError("store '" + path.string() +
                                    "': a ragged index has the wrong length");
     std::vector<StoredRealization> out(rows);
@@ -1341,6 +1480,7 @@ std::vector<StoredRealization> read_realizations(const fs::path& path) {
         StoredRealization& o = out[row];
         for (std::size_t i = 0; i < columns().size(); ++i) {
             const ColumnDef& d = columns()[i];
+            if (!present[i]) continue;
             if (d.family < 0) {
                 d.pull(o, bufs[i], row, 1);
             } else {

@@ -51,7 +51,7 @@ std::string refusal(const store::CampaignPlan& stored, const store::CampaignPlan
 TEST(Plan, SceneTextCoversEverySceneParameter) {
     // If this fails, engine::SceneParams gained (or lost) a field: add it to scene_text() in
     // src/campaign/plan.cpp (it decides which stores a sweep may resume), then update the size.
-    EXPECT_EQ(sizeof(engine::SceneParams), 480u);
+    EXPECT_EQ(sizeof(engine::SceneParams), 488u);
     engine::SceneParams p;
     const std::string base = scene_text(p);
     EXPECT_EQ(std::count(base.begin(), base.end(), '\n'), 40);
@@ -72,9 +72,10 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));
     // The modelling choices of issue 11: absent from the text at their defaults (so stores
     // written before them resume), present when set.
-    for (const char* name : {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over",
-                             "slip_rule", "lever_arm", "normal_damping", "fill_base",
-                             "contact_corrections"})
+    for (const char* name :
+         {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over", "slip_rule",
+          "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization",
+          "contact_corrections"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
     EXPECT_TRUE(
         changed([](auto& q) { q.hopper.outlet_measure = engine::OutletMeasure::inner_envelope; }));
@@ -87,6 +88,20 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
         [](auto& q) { q.material.normal_damping = engine::NormalDamping::exact_restitution; }));
     EXPECT_TRUE(changed([](auto& q) { q.protocol.fill_base = 1.0; }));
     EXPECT_TRUE(changed([](auto& q) { q.integrator.contact_corrections = true; }));
+    // Issue 13's steady state, likewise.
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.mode = engine::ProtocolMode::steady_state; }));
+    EXPECT_TRUE(changed([](auto& q) {
+                    q.protocol.mode = engine::ProtocolMode::steady_state;
+                    q.protocol.jams_per_realization = 5;
+                }) &&
+                [] {
+                    engine::SceneParams q;
+                    q.protocol.mode = engine::ProtocolMode::steady_state;
+                    q.protocol.jams_per_realization = 5;
+                    return scene_text(q).find(
+                               "protocol.mode=steady_state\nprotocol.jams_per_realization=5\n") !=
+                           std::string::npos;
+                }());
     // Shortest round-trip numbers: one ulp differs.
     EXPECT_TRUE(changed([](auto& q) { q.material.system.e_n = std::nextafter(0.5, 1.0); }));
 }

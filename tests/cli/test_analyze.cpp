@@ -147,7 +147,8 @@ TEST(Analyze, GroupHasOneRowPerPointAndFlagsForMissingValues) {
          point(4.0, 60, {result(Status::complete, {1.0})})});
     const store::DerivedGroup g = analysis_group(a, "{}");
     EXPECT_EQ(g.name, "analysis");
-    ASSERT_EQ(g.groups.size(), 4u);
+    ASSERT_EQ(g.groups.size(), 5u);
+    EXPECT_EQ(g.groups[4].name, "avalanche");
     const auto& points = g.groups[0];
     EXPECT_EQ(points.name, "points");
     bool saw_has_tau = false;
@@ -170,6 +171,118 @@ TEST(Analyze, GroupHasOneRowPerPointAndFlagsForMissingValues) {
     EXPECT_TRUE(saw_has_tau);
     // The Kaplan–Meier steps of point 0 (5 distinct jam times) and none for point 1.
     EXPECT_EQ(std::get<std::vector<double>>(g.groups[1].datasets[0].values).size(), 5u);
+}
+
+// ----- avalanches and arches (issue 13) ---------------------------------------------------------
+
+// A result whose intervals have the given avalanche sizes (the last censored) and one arch of
+// `disks` disks per jam.
+RealizationResult with_sizes(std::vector<int> sizes, int disks = 3) {
+    std::vector<double> t(sizes.size(), 0.5);
+    RealizationResult r = result(Status::complete, t);
+    r.avalanche_sizes = sizes;
+    for (int k = 0; k < r.n_jams; ++k) {
+        engine::Arch a;
+        for (int i = 0; i < disks; ++i) {
+            a.ids.push_back(i);
+            a.x.push_back(0.0);
+            a.y.push_back(0.0);
+        }
+        a.span = 0.02;
+        a.max_angle = 3.0 * core::deg * 50;  // 150 deg
+        r.arches.push_back(a);
+    }
+    return r;
+}
+
+TEST(AnalyzeAvalanches, MeanSizeIsGrainsPerJamWithTheChiSquareInterval) {
+    // Two realizations: sizes {10, 30, 5 censored} and {20, 35 censored}: S = 100 grains,
+    // r = 3 jams: <s> = 33.33, s.e. <s>/sqrt(3) = 19.25, p = 0.03; the interval
+    // [2S/chi2_0.975(6), 2S/chi2_0.025(6)] = [200/14.449, 200/1.2373] = [13.84, 161.6].
+    const Analysis a =
+        analyze_points({point(2.0, 60, {with_sizes({10, 30, 5}), with_sizes({20, 35}, 4)})});
+    const auto& av = a.points[0].avalanche;
+    ASSERT_TRUE(av.fit && av.fit->tau) << av.reason;
+    EXPECT_EQ(av.realizations, 2);
+    EXPECT_DOUBLE_EQ(av.fit->total_observed_time, 100.0);
+    EXPECT_EQ(av.fit->n_uncensored, 3);
+    EXPECT_NEAR(*av.fit->tau, 100.0 / 3.0, 1e-12);
+    EXPECT_NEAR(*av.fit->tau * *av.fit->sigma_log_tau, 100.0 / 3.0 / std::sqrt(3.0), 1e-9);
+    EXPECT_NEAR(*av.fit->tau_lo, 200.0 / 14.4494, 0.01);
+    EXPECT_NEAR(*av.fit->tau_hi, 200.0 / 1.23734, 0.1);
+    // Arches: 2 jams with 3 disks, 1 with 4.
+    EXPECT_EQ(av.arch_jams, 3);
+    EXPECT_EQ(av.arches_found, 3);
+    ASSERT_EQ(av.arch_size_counts.size(), 5u);
+    EXPECT_EQ(av.arch_size_counts[3], 2);
+    EXPECT_EQ(av.arch_size_counts[4], 1);
+    EXPECT_NEAR(*av.arch_mean_size, 10.0 / 3.0, 1e-12);
+    EXPECT_NEAR(*av.arch_mean_max_angle_deg, 150.0, 1e-9);
+    const std::string json = analysis_json(a, "s.h5", "c");
+    EXPECT_NE(json.find("\"p_clog_per_grain\": 0.03"), std::string::npos) << json;
+    EXPECT_NE(json.find("\"size_counts\": {\"3\": 2, \"4\": 1}"), std::string::npos) << json;
+}
+
+TEST(AnalyzeAvalanches, ResultsWithoutSizesAreCountedAndLeftOut) {
+    // Stored before issue 13: no avalanche sizes, no arches.
+    const Analysis a = analyze_points({point(2.0, 60, {result(Status::complete, {0.2, 0.3})})});
+    const auto& av = a.points[0].avalanche;
+    EXPECT_FALSE(av.fit);
+    EXPECT_EQ(av.realizations_without, 1);
+    EXPECT_NE(av.reason.find("stored before avalanche sizes"), std::string::npos);
+    const std::string json = analysis_json(a, "s.h5", "c");
+    EXPECT_NE(json.find("\"mean_s\": null"), std::string::npos);
+}
+
+TEST(AnalyzeAvalanches, MeanSizeVersusDFitsTheExponentialExactly) {
+    // <s> = 10 e^(B D) with B = 100 /m: ln p = -ln 10 - B D exactly. Every point has r = 4 jams
+    // (sizes s each, censored 0) at five outlets: both laws fitted, a decision made.
+    std::vector<AnalysisPointInput> pts;
+    for (double D : {2.0, 2.2, 2.4, 2.6, 2.8}) {
+        const int s = int(std::lround(10.0 * std::exp(100.0 * D / 100.0)));
+        pts.push_back(point(D, 60, {with_sizes({s, s, s, s, 0})}));
+    }
+    const Analysis a = analyze_points(pts);
+    ASSERT_EQ(a.groups.size(), 1u);
+    const auto& f = a.groups[0].avalanche;
+    EXPECT_EQ(f.n_points, 5);
+    ASSERT_TRUE(f.exponential.valid) << f.exponential.reason;
+    EXPECT_NEAR(f.exponential.B, 100.0, 0.5);  // sizes rounded to whole grains
+    EXPECT_NEAR(-f.exponential.ln_A, std::log(10.0), 0.02);
+    EXPECT_NE(f.preferred, "");
+    const std::string json = analysis_json(a, "s.h5", "c");
+    EXPECT_NE(json.find("\"avalanche_fits\""), std::string::npos);
+    EXPECT_NE(json.find("\"ln_s0\""), std::string::npos);
+    // Four points: too few to decide, said so.
+    pts.pop_back();
+    const Analysis b = analyze_points(pts);
+    EXPECT_EQ(b.groups[0].avalanche.preferred, "undecided");
+    EXPECT_NE(b.groups[0].avalanche.decision.find("too few points"), std::string::npos);
+}
+
+// Issue 16 leftover: points pooled with --allow-mixed whose labels do not show a difference.
+TEST(AnalyzeGroups, SettingsTheLabelsHideSplitTheGroups) {
+    auto with_mu = [](double D, const char* mu) {
+        AnalysisPointInput p = point(D, 60, {result(Status::complete, {0.2, 0.3})});
+        p.scene["material.mu"] = mu;
+        return p;
+    };
+    const Analysis a =
+        analyze_points({with_mu(2.0, "0.8"), with_mu(2.5, "0.8"), with_mu(3.0, "0.5")});
+    ASSERT_EQ(a.groups.size(), 2u);
+    EXPECT_EQ(a.groups[0].group, "theta_deg=60 material.mu=0.8");
+    EXPECT_EQ(a.groups[0].points.size(), 2u);
+    EXPECT_EQ(a.groups[1].group, "theta_deg=60 material.mu=0.5");
+    // Labels that show every difference: nothing added (groups as before).
+    const Analysis b = analyze_points({with_mu(2.0, "0.8"), with_mu(2.5, "0.8"), [&] {
+                                           AnalysisPointInput p =
+                                               point(3.0, 30, {result(Status::complete, {0.2})});
+                                           p.scene["material.mu"] = "0.5";
+                                           return p;
+                                       }()});
+    ASSERT_EQ(b.groups.size(), 2u);
+    EXPECT_EQ(b.groups[0].group, "theta_deg=60");
+    EXPECT_EQ(b.groups[1].group, "theta_deg=30");
 }
 
 // ----- fields (issue 7) -------------------------------------------------------------------------

@@ -91,6 +91,7 @@ TEST(ShippedCampaigns, ParseWithTheExpectedPointAndTaskCounts) {
     // Counts from spec/paper-campaigns.md (see the comment at the top of each file).
     const Shipped files[] = {
         {"campaigns/tiny.toml", 2, 4},
+        {"campaigns/adaptive-example.toml", 3, 36},  // rounds: the plan holds max_realizations
         {"campaigns/quickstart.toml", 6, 48},
         {"campaigns/paper/single-material.toml", 12, 15},  // 12 rows + 3 repeats of one row
         {"campaigns/paper/large-outlet-material.toml", 8, 8},

@@ -113,6 +113,25 @@ inline engine::FieldMoments fabricated_fields(int k, int nx = 3, int ny = 2) {
     return m;
 }
 
+// Avalanche sizes (one per interval) and arches (one per jam; the first not found) (issue 13).
+inline engine::RealizationResult with_science(engine::RealizationResult r, int k) {
+    r.avalanche_sizes.clear();
+    for (std::size_t i = 0; i < r.survival_times.size(); ++i)
+        r.avalanche_sizes.push_back(int(7 * i) + k);
+    r.arches.assign(r.jam_onsets.size(), {});
+    for (std::size_t j = 1; j < r.arches.size(); ++j) {
+        auto& a = r.arches[j];
+        for (int d = 0; d < 3 + int(j); ++d) {
+            a.ids.push_back(100 * k + d);
+            a.x.push_back(-0.01 + 0.005 * d);
+            a.y.push_back(0.004 + 1e-4 * d);
+        }
+        a.span = 0.0185 + 1e-3 * k;
+        a.max_angle = 2.5 + 0.1 * double(j);
+    }
+    return r;
+}
+
 inline engine::RealizationResult with_fields(engine::RealizationResult r, int k, int nx = 3,
                                              int ny = 2) {
     r.fields = fabricated_fields(k, nx, ny);

@@ -269,6 +269,44 @@ TEST(ResultCodec, DamagedFieldsAreCleanErrors) {
         }
 }
 
+TEST(ResultCodec, AvalanchesAndArchesAreVersion3AndRoundTrip) {
+    for (int k = 0; k < 6; ++k) {
+        auto r = testing::with_science(testing::fabricated(k), k);
+        if (k % 2) r = testing::with_fields(r, k);
+        const Bytes b = encode_result(r);
+        EXPECT_EQ(b[4] | (b[5] << 8), 3) << k;
+        const auto back = decode_result(b);
+        EXPECT_EQ(back.avalanche_sizes, r.avalanche_sizes);
+        ASSERT_EQ(back.arches.size(), r.arches.size());
+        for (std::size_t j = 0; j < r.arches.size(); ++j) {
+            EXPECT_EQ(back.arches[j].ids, r.arches[j].ids);
+            EXPECT_EQ(back.arches[j].y, r.arches[j].y);
+            EXPECT_EQ(back.arches[j].max_angle, r.arches[j].max_angle);
+        }
+        EXPECT_EQ(back.fields.has_value(), r.fields.has_value());
+        EXPECT_EQ(encode_result(back), b);
+    }
+}
+
+TEST(ResultCodec, InconsistentAvalanchesAndArchesAreCleanErrors) {
+    auto r = testing::with_science(testing::fabricated(2), 1);  // 3 intervals, 2 jams
+    auto bad = r;
+    bad.avalanche_sizes.pop_back();
+    EXPECT_NE(decode_error_of(encode_result(bad)).find("avalanche sizes: 2 values for 3 survival"),
+              std::string::npos)
+        << decode_error_of(encode_result(bad));
+    bad = r;
+    bad.arches.pop_back();
+    EXPECT_NE(decode_error_of(encode_result(bad)).find("arches: 1 arches for 2 jams"),
+              std::string::npos);
+    bad = r;
+    bad.arches[1].x.pop_back();
+    EXPECT_NE(decode_error_of(encode_result(bad)).find("disk ids with"), std::string::npos);
+    bad = r;
+    bad.avalanche_sizes[0] = -1;
+    EXPECT_NE(decode_error_of(encode_result(bad)).find("negative size"), std::string::npos);
+}
+
 TEST(ResultCodec, PhysicsDigestIgnoresOnlyWallClock) {
     const auto a = testing::fabricated(2);
     auto b = a;

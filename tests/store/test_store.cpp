@@ -162,6 +162,38 @@ TEST(Store, FieldsSurviveJournalHdf5AndRebuild) {
     EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
 }
 
+TEST(Store, AvalanchesAndArchesSurviveJournalHdf5AndRebuild) {
+    const fs::path p = scratch() / "sci.h5";
+    const auto r0 = testing::with_science(fabricated(2), 1);  // 2 jams: arches of 0 and 4 disks
+    const auto r1 = testing::with_science(fabricated(5), 2);  // 2 jams
+    {
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        s.append(result_record(A, 0, r0));
+        s.append(result_record(A, 1, fabricated(4)));  // as stored before issue 13: none
+        s.append(result_record(A, 2, testing::with_fields(r1, 2, 3, 2)));
+        s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
+    }
+    const auto check = [&](const std::vector<StoredRealization>& got) {
+        ASSERT_EQ(got.size(), 3u);
+        EXPECT_EQ(encode_result(got[0].result), result_record(A, 0, r0).result);
+        EXPECT_TRUE(got[1].result.avalanche_sizes.empty());
+        EXPECT_TRUE(got[1].result.arches.empty());
+        EXPECT_EQ(got[2].result.arches.size(), 2u);
+        EXPECT_EQ(got[2].result.arches[1].ids.size(), 4u);
+        EXPECT_EQ(got[2].result.avalanche_sizes, r1.avalanche_sizes);
+    };
+    check(read_realizations(p));
+    check(read_journal_realizations(p));
+    fs::remove(p);  // rebuilt from the journal by the next run
+    {
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    }
+    check(read_realizations(p));
+}
+
 TEST(Store, WithoutFieldsThereIsNoFieldsGroup) {
     const fs::path p = finished_store(scratch());
     EXPECT_TRUE(derived_group_members(p, "fields").empty());

@@ -11,12 +11,14 @@
 //   [walls]      e_n mu particle_diameter_cm spacing
 //   [integrator] scheme ("gear4" | "verlet") steps_per_collision skin
 //   [protocol]   see docs in README (jam detection, shaking, limits, sampling, guards)
-//   [campaign]   name store seed realizations
+//   [campaign]   name store seed realizations, and for a campaign that stops when good
+//                enough: target target_rel_ci max_realizations round_realizations
 //   [sweep]      D_cm = [..], theta_deg = [..], <section>.<key> = [..]  (Cartesian product)
 //   [[points]]   D_cm, theta_deg, <section> = { key = value }, realizations (optional)
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -36,9 +38,25 @@ struct ParamSetting {
 struct Point {
     std::vector<ParamSetting> settings;  // canonical order: D_cm, theta_deg, then by name
     engine::SceneParams scene;           // the base scene with the settings applied, validated
-    int realizations = 0;
-    std::string label;  // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
+    int realizations = 0;                // planned (with a target: max_realizations)
+    std::string label;                   // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
+    // With a campaign target: the realizations of the first round (the point's `realizations`
+    // as written); 0 without a target.
+    int first_round = 0;
 };
+
+// A campaign that stops when good enough (issue 13; campaign/adaptive.hpp): realizations run in
+// rounds until the relative half-width of the 95 % interval of `quantity` is at most
+// rel_half_width at every point, or a point has max_realizations.
+struct CampaignTarget {
+    enum class Quantity { tau, mean_s };
+    Quantity quantity = Quantity::tau;
+    double rel_half_width = 0.1;
+    int max_realizations = 0;
+    int round = 0;  // realizations added to a point that needs more, per round
+};
+
+std::string to_string(CampaignTarget::Quantity q);
 
 struct CampaignSpec {
     std::string name;
@@ -46,6 +64,7 @@ struct CampaignSpec {
     std::uint64_t seed = 0;
     int realizations = 1;  // default per point
     std::vector<Point> points;
+    std::optional<CampaignTarget> target;
 };
 
 struct SweepFile {

@@ -45,7 +45,15 @@ enum class NormalDamping {
     exact_restitution,  // gamma_n such that two large disks rebound with exactly e_n
 };
 
+// How a realization runs (docs/model.md, "Realization protocol").
+enum class ProtocolMode {
+    published,     // fill, settle, discharge until empty (the default)
+    steady_state,  // particles that leave are re-inserted at the top of the packing: the head
+                   // stays constant and the realization runs until jams_per_realization jams
+};
+
 std::string to_string(OutletMeasure m);
+std::string to_string(ProtocolMode m);
 std::string to_string(SlipRule r);
 std::string to_string(LeverArm a);
 std::string to_string(NormalDamping d);
@@ -132,6 +140,10 @@ struct ProtocolParams {
     double sample_interval = 0.01;  // s between samples of the discharge curve
     // Numerical guards.
     double max_overlap = 0.25;  // largest allowed overlap / d_small
+    // Steady state (issue 13): re-insert what leaves; end after this many jams (0: only at
+    // max_time). Ignored by the published protocol, which must leave it at 0.
+    ProtocolMode mode = ProtocolMode::published;
+    int jams_per_realization = 0;
 };
 
 struct SceneParams {

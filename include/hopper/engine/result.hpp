@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "hopper/engine/arch.hpp"
 #include "hopper/engine/fields.hpp"
 
 namespace hopper::engine {
@@ -65,6 +66,13 @@ struct RealizationResult {
     std::vector<bool> censored;
     std::vector<double> jam_onsets;   // discharge time of each jam's onset
     std::vector<int> shakes_per_jam;  // shakes used on each jam (same length as jam_onsets)
+    // Avalanche size of each survival interval: the particles that crossed the outlet plane
+    // during it (same length as survival_times; the censored last one counts those until the
+    // end). Empty in results stored before avalanche sizes existed (issue 13).
+    std::vector<int> avalanche_sizes;
+    // The arch that blocked the outlet at each jam (same length as jam_onsets; an arch that
+    // was not found has no disks). Empty in results stored before arches existed.
+    std::vector<Arch> arches;
     int n_jams = 0;
     int n_shakes = 0;
     int n_jams_multi_shake = 0;            // jams that needed more than one shake

@@ -90,10 +90,16 @@ std::string hex64(std::uint64_t v);  // 16 lowercase hex digits
 //              nx, ny, kernel, kernel_width), total_windows, samples, t_first, t_last, the
 //              per-node arrays (windows, weight, mean and M2 of each field; nx * ny each), the
 //              outline (x, y) and the wall diameter. Written only when fields are present.
-// Both versions are read. Decoding the fields checks them before allocating: nx, ny positive,
+//   Version 3 (issue 13): version 1, then u8 has_fields and the fields as in version 2 when it
+//              is 1, then the avalanche sizes (i32s, one per survival interval) and the arches
+//              (u32 count, one per jam; each: ids i32s, x f64s, y f64s, span f64, max_angle
+//              f64). Written whenever a result has avalanche sizes or arches (every result of
+//              this build that opened the outlet); versions 1 and 2 decode with none.
+// All three versions are read. Decoding the fields checks them before allocating: nx, ny positive,
 // nx * ny at most max_field_nodes and within the bytes left, every per-node array nx * ny long,
 // every number finite, counts non-negative; otherwise core::StoreError.
-inline constexpr std::uint16_t result_codec_version = 2;
+inline constexpr std::uint16_t result_codec_version = 3;
+inline constexpr std::uint16_t result_codec_version_fields = 2;
 inline constexpr std::uint16_t result_codec_version_without_fields = 1;
 inline constexpr std::int64_t max_field_nodes = 20'000'000;  // the engine refuses larger grids
 Bytes encode_result(const engine::RealizationResult& r);
