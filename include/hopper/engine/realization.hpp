@@ -8,6 +8,7 @@
 #include <memory>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include "hopper/engine/params.hpp"
 #include "hopper/engine/result.hpp"
@@ -48,6 +49,12 @@ struct RunHooks {
     // Cooperative stop: when set, the realization ends with status failed and a message saying
     // it was interrupted (callers treat it as not done).
     const std::atomic<bool>* stop = nullptr;
+    // Checkpoints (checkpoint.hpp): when *checkpoint_request is true at the start of a time step
+    // (every step is looked at; a relaxed atomic load), the realization clears it, saves its
+    // whole state and hands the bytes to on_checkpoint. The callback may throw to end the
+    // realization there (the worker does, to stop right after the checkpoint of a drain).
+    std::atomic<bool>* checkpoint_request = nullptr;
+    std::function<void(std::vector<std::uint8_t>&&)> on_checkpoint;
 };
 
 class System;
@@ -75,6 +82,13 @@ class Realization {
     System& system();
     Phase phase() const;
 
+    // The whole state as bytes (checkpoint.hpp), taken between two time steps. restore_state
+    // replaces the state of a realization constructed with the same parameters and seed; it
+    // throws core::ConfigError when the bytes belong to another realization, another engine
+    // format or are damaged (the realization is then unchanged only in the first two cases).
+    std::vector<std::uint8_t> save_state() const;
+    void restore_state(std::span<const std::uint8_t> bytes);
+
   private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
@@ -84,5 +98,11 @@ class Realization {
 // message naming the cause and the remedy. Throws core::ConfigError for invalid parameters.
 RealizationResult run_realization(const SceneParams& params, std::uint64_t seed,
                                   const RunHooks& hooks = {});
+// The same realization continued from a state saved by save_state (a checkpoint): the result is
+// bit-identical to that of run_realization. Throws core::ConfigError when the state does not
+// belong to this realization (restore_state).
+RealizationResult resume_realization(const SceneParams& params, std::uint64_t seed,
+                                     std::span<const std::uint8_t> state,
+                                     const RunHooks& hooks = {});
 
 }  // namespace hopper::engine

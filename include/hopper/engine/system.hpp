@@ -133,6 +133,7 @@ class System {
   private:
     template <class Law, Scheme S, bool Lever>
     friend struct KernelImpl;
+    friend struct CheckpointAccess;  // checkpoint.cpp: the whole state to bytes and back
 
     void ensure_ready();
     // Calls pair(i, j, k, dx, dy, d2) for every touching mobile pair of the neighbour list and
