@@ -23,7 +23,7 @@ Message decode_message(std::span<const std::uint8_t> bytes) {
     if (in.u32() != message_magic) in.fail("not a master/worker message (bad magic)");
     Message m;
     const std::uint8_t kind = in.u8();
-    if (kind < 1 || kind > 7) in.fail("unknown message kind " + std::to_string(kind));
+    if (kind < 1 || kind > 9) in.fail("unknown message kind " + std::to_string(kind));
     m.kind = static_cast<MessageKind>(kind);
     m.task = in.i32();
     m.attempt = in.i32();
