@@ -122,6 +122,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     const auto& spec = c.sweep.campaign;
     const fs::path store_path = opt.store ? *opt.store : spec.store;
     SignalWatcher signals;
+    // Before the store is touched: a deadline that cannot be known is an error.
+    const std::optional<double> deadline = opt.deadline ? opt.deadline(err) : std::nullopt;
     store::Store st(store_path, opt.store_options);
     for (const auto& n : st.notes())
         err << "campaign: note: " << n << '\n';
@@ -213,7 +215,7 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         checkpoints->remove_dir_if_empty();
     }
     mo.running_file = running_path(store_path);
-    if (opt.deadline) mo.deadline = opt.deadline(err);
+    mo.deadline = deadline;
     // The cost model's correction from what this campaign measured so far (every run).
     if (resumed) {
         const store::StoreStatus before = st.status();

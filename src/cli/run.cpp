@@ -182,15 +182,13 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         if (given && text != "slurm") {
             const auto d = parse_deadline(text, store::unix_now());
             if (d) opt.deadline = [d](std::ostream&) { return d; };
+        } else if (given && !in_job) {
+            parse_deadline("slurm", 0.0);  // throws: not inside a Slurm job
         } else if (given || in_job) {
             opt.deadline = [given](std::ostream& err) -> std::optional<double> {
                 std::string why;
                 if (auto t = slurm_job_end(&why)) return t;
-                if (given)
-                    throw core::ConfigError(
-                        "--deadline slurm: the Slurm job's end time is "
-                        "unknown: " +
-                        why);
+                if (given) parse_deadline("slurm", 0.0);  // throws, naming the reason
                 err << "campaign: note: no deadline (" << why
                     << "); give --deadline to stop starting realizations that cannot finish"
                     << std::endl;
