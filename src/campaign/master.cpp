@@ -138,6 +138,9 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         for (std::size_t i = 0; i < todo.size(); ++i)
             saved_before[i] = ckpt->peek_seconds(key_of(Item{i, 1})).value_or(0.0);
     const bool timed = options_.deadline.has_value();
+    // Seconds this run may compute: from its start to the deadline minus the grace.
+    const double allocation =
+        timed ? *options_.deadline - store::unix_now() - options_.grace : 1e300;
     auto seconds_to_deadline = [&] {
         return timed ? *options_.deadline - store::unix_now() : 1e300;
     };
@@ -365,6 +368,16 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
                     const double need = std::max(
                         0.0, t.expected_seconds * correction() - saved_before[pick->index]);
                     if (need <= left) break;
+                    // Longer than a whole allocation like this one: it can only ever finish in
+                    // pieces, so with checkpoints it starts (its state is saved at the
+                    // deadline) rather than never.
+                    if (ckpt && need > allocation && left > 0.25 * allocation) {
+                        log_ << "campaign: '" << t.label << "' #" << t.realization
+                             << " is expected to need " << format_duration(need)
+                             << ", more than this allocation's " << format_duration(allocation)
+                             << "; started anyway: its state is saved at the deadline" << std::endl;
+                        break;
+                    }
                 }
                 if (pick == queue.end()) break;
             }
