@@ -275,6 +275,14 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
                 // The other copy of a reassigned realization was stored already.
                 if (!finished[item.index])
                     record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
+                // A state that made its realization raise must not be tried again.
+                if (ckpt && was.resumed && !finished[item.index]) {
+                    ckpt->remove(key_of(item));
+                    saved_before[item.index] = 0.0;
+                    log_ << "campaign: the checkpoint of '" << todo[item.index].label << "' #"
+                         << todo[item.index].realization
+                         << " is removed: the next attempt starts from the beginning" << std::endl;
+                }
                 break;
             case MessageKind::interrupted:
                 if (finished[item.index]) break;

@@ -13,7 +13,8 @@ namespace hopper::cli {
 namespace {
 
 const char* forms =
-    "allowed: none, slurm, @SECONDS_SINCE_1970, an ISO 8601 UTC time such as "
+    "allowed: none, slurm, slurm-SECONDS (the job's end time minus SECONDS), "
+    "@SECONDS_SINCE_1970, an ISO 8601 UTC time such as "
     "2026-11-24T15:00:00Z, or a time from now such as +3600, +90m, +2h, +1:30:00";
 
 [[noreturn]] void bad(const std::string& text, const std::string& why) {
@@ -54,12 +55,18 @@ std::optional<double> slurm_job_end(std::string* why) {
 
 std::optional<double> parse_deadline(const std::string& text, double now) {
     if (text == "none") return std::nullopt;
-    if (text == "slurm") {
+    std::smatch m;
+    if (text == "slurm" ||
+        std::regex_match(text, m, std::regex(R"(slurm-([0-9]+(\.[0-9]+)?)([smh]?))"))) {
+        double before = 0.0;
+        if (text != "slurm") {
+            const std::string unit = m[3].str();
+            before = std::stod(m[1].str()) * (unit == "m" ? 60.0 : unit == "h" ? 3600.0 : 1.0);
+        }
         std::string why;
-        if (auto t = slurm_job_end(&why)) return t;
+        if (auto t = slurm_job_end(&why)) return *t - before;
         bad(text, "the Slurm job's end time is unknown: " + why);
     }
-    std::smatch m;
     if (std::regex_match(text, m, std::regex(R"(@([0-9]+(\.[0-9]+)?))")))
         return std::stod(m[1].str());
     if (std::regex_match(text,

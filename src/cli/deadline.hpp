@@ -9,6 +9,8 @@ namespace hopper::cli {
 // Seconds since 1970 of a deadline given as
 //   "none"                  no deadline (nullopt)
 //   "slurm"                 the Slurm job's end time (slurm_job_end(); an error outside a job)
+//   "slurm-120", "slurm-2m" the Slurm job's end time minus that much (the batch template: the
+//                           moment Slurm's warning signal is due, plus the grace)
 //   "@1767225600"           seconds since 1970
 //   "2026-11-24T15:00:00Z"  ISO 8601 UTC
 //   "+3600", "+90m", "+2h", "+1:30:00"   from `now`

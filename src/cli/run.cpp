@@ -57,8 +57,8 @@ po::options_description run_options() {
          "when the run must have ended: realizations the cost model (scaled by the durations "
          "measured so far) expects to end after T minus --grace are not started, running ones "
          "are stopped (their states saved) at T minus --grace, and the run exits 4 (resumable). "
-         "T: slurm (the job's end time; the default inside a Slurm job), none, "
-         "@SECONDS_SINCE_1970, "
+         "T: slurm (the job's end time; the default inside a Slurm job), slurm-S (S seconds "
+         "before it), none, @SECONDS_SINCE_1970, "
          "2026-11-24T15:00:00Z (UTC), or from now: +3600, +90m, +2h, +1:30:00")  //
         ("checkpoint-interval", po::value<std::string>()->value_name("S"),
          "seconds of wall time between checkpoints of each running realization, written beside "
@@ -179,16 +179,17 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         const std::string text = given ? vm["deadline"].as<std::string>() : "";
         const char* job = std::getenv("SLURM_JOB_ID");
         const bool in_job = job && *job;
-        if (given && text != "slurm") {
+        const bool slurm = text == "slurm" || text.starts_with("slurm-");
+        if (given && !slurm) {
             const auto d = parse_deadline(text, store::unix_now());
             if (d) opt.deadline = [d](std::ostream&) { return d; };
         } else if (given && !in_job) {
-            parse_deadline("slurm", 0.0);  // throws: not inside a Slurm job
+            parse_deadline(text, 0.0);  // throws: not inside a Slurm job (or a bad value)
         } else if (given || in_job) {
-            opt.deadline = [given](std::ostream& err) -> std::optional<double> {
+            opt.deadline = [given, text](std::ostream& err) -> std::optional<double> {
+                if (given) return parse_deadline(text, 0.0);  // throws, naming the reason
                 std::string why;
                 if (auto t = slurm_job_end(&why)) return t;
-                if (given) parse_deadline("slurm", 0.0);  // throws, naming the reason
                 err << "campaign: note: no deadline (" << why
                     << "); give --deadline to stop starting realizations that cannot finish"
                     << std::endl;

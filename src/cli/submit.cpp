@@ -59,21 +59,21 @@ po::options_description submit_options() {
         ("job-name", po::value<std::string>()->value_name("NAME"),
          "Slurm job name (default: hopper-<campaign name>)")  //
         ("template", po::value<std::string>()->value_name("FILE"),
-         "render FILE instead of the built-in slurm/hopper.sbatch.in")                      //
+         "render FILE instead of the built-in slurm/hopper.sbatch.in")  //
         ("cpus-per-task", po::value<std::string>()->value_name("N"),
          "#SBATCH --cpus-per-task=N (each rank simulates on one core: N > 1 leaves cores idle "
          "unless the launcher's options use them; a warning says so)")  //
         ("mem", po::value<std::string>()->value_name("SIZE"),
          "#SBATCH --mem=SIZE per node: a number with an optional unit K, M, G or T (e.g. 4G)")  //
-        ("qos", po::value<std::string>()->value_name("Q"), "#SBATCH --qos=Q")  //
+        ("qos", po::value<std::string>()->value_name("Q"), "#SBATCH --qos=Q")                   //
         ("constraint", po::value<std::string>()->value_name("EXPR"),
          "#SBATCH --constraint=EXPR (node features: letters, digits and _ . & | , * [ ] : ( ))")  //
         ("mail-type", po::value<std::string>()->value_name("TYPES"),
          "#SBATCH --mail-type=TYPES: comma-separated NONE, BEGIN, END, FAIL, REQUEUE, ALL, "
          "INVALID_DEPEND, STAGE_OUT, TIME_LIMIT, TIME_LIMIT_90, TIME_LIMIT_80, TIME_LIMIT_50, "
-         "ARRAY_TASKS")  //
+         "ARRAY_TASKS")                                                                          //
         ("mail-user", po::value<std::string>()->value_name("ADDR"), "#SBATCH --mail-user=ADDR")  //
-        ("exclusive", po::bool_switch(), "#SBATCH --exclusive (whole nodes)")  //
+        ("exclusive", po::bool_switch(), "#SBATCH --exclusive (whole nodes)")                    //
         ("sbatch-arg", po::value<std::vector<std::string>>()->value_name("ARG"),
          "any other sbatch option, as one #SBATCH line each (repeatable), e.g. "
          "--sbatch-arg=--gres=gpu:0 --sbatch-arg=--reservation=r1")  //
@@ -93,8 +93,9 @@ po::options_description submit_options() {
         ("no-checkpoints", po::bool_switch(),
          "campaign run --no-checkpoints (a realization stopped at the limit starts over)")  //
         ("deadline", po::value<std::string>()->value_name("D"),
-         "slurm (default: campaign run takes the job's end time and starts no realization that "
-         "cannot end before it minus --grace) or none (dispatch ignores the limit)")  //
+         "slurm (default: campaign run --deadline slurm-(LEAD-GRACE): it starts no realization "
+         "expected to end after the moment the warning signal is due, and stops running ones "
+         "then, saving their states) or none (dispatch ignores the limit)")  //
         ("dry-run", po::bool_switch(),
          "print the batch script and, on stderr, the realizations to run and their estimated "
          "core-hours; write and submit nothing")  //
@@ -373,8 +374,9 @@ int submit_command(const std::vector<std::string>& args) {
                      "submitting user\n";
     auto no_newline = [](const std::string& option, const std::string& a) {
         if (a.empty() || a.find_first_of(std::string("\n\r\0'", 4)) != std::string::npos)
-            throw ConfigError(option + " must be one non-empty argument without quotes or "
-                                       "newlines, got '" +
+            throw ConfigError(option +
+                              " must be one non-empty argument without quotes or "
+                              "newlines, got '" +
                               a + "'");
     };
     std::string sbatch_args;
@@ -423,8 +425,7 @@ int submit_command(const std::vector<std::string>& args) {
     if (!cpus.empty() && cpus != "1")
         std::cerr << "campaign: warning: --cpus-per-task " << cpus
                   << ": each rank simulates on one core, so " << (std::stol(cpus) - 1)
-                  << " of every " << cpus
-                  << " CPUs stay idle (use --ntasks for more workers)\n";
+                  << " of every " << cpus << " CPUs stay idle (use --ntasks for more workers)\n";
     if (launcher == "none" && ntasks > 1 && !vm.count("threads"))
         std::cerr << "campaign: note: --launcher none: one process with " << ntasks
                   << " worker threads (--ntasks)\n";
@@ -437,20 +438,25 @@ int submit_command(const std::vector<std::string>& args) {
                 "--checkpoint-interval and --no-checkpoints contradict each other: give one");
         add_run("--no-checkpoints");
     } else if (vm.count("checkpoint-interval")) {
-        const double ci = parse_finite("--checkpoint-interval",
-                                       vm["checkpoint-interval"].as<std::string>());
+        const double ci =
+            parse_finite("--checkpoint-interval", vm["checkpoint-interval"].as<std::string>());
         if (ci < 0) throw ConfigError("--checkpoint-interval must be >= 0");
         std::ostringstream t;
         t << ci;
         add_run("--checkpoint-interval " + t.str());
     }
-    if (vm.count("deadline")) {
-        const std::string d = vm["deadline"].as<std::string>();
+    {
+        // The run's deadline: when Slurm's warning signal is due (the end time minus the lead)
+        // plus the grace, so that what the master starts ends before the signal would drain it.
+        const std::string d = vm.count("deadline") ? vm["deadline"].as<std::string>() : "slurm";
         if (d != "slurm" && d != "none")
-            throw ConfigError("--deadline must be slurm or none for submit (the job's end "
-                              "time, or no time-aware dispatch), got '" +
-                              d + "'");
-        add_run("--deadline " + d);
+            throw ConfigError(
+                "--deadline must be slurm or none for submit (the job's end "
+                "time, or no time-aware dispatch), got '" +
+                d + "'");
+        std::ostringstream t;
+        t << (static_cast<double>(lead) - grace);
+        add_run(d == "none" ? "--deadline none" : "--deadline slurm-" + t.str());
     }
 
     std::ostringstream grace_text;

@@ -87,7 +87,7 @@ for want in "#SBATCH --cpus-per-task=2" "#SBATCH --mem=4G" "#SBATCH --qos=high" 
     "#SBATCH --constraint=haswell&ib" "#SBATCH --mail-type=END,FAIL" \
     "#SBATCH --mail-user=me@example.org" "#SBATCH --exclusive" "#SBATCH --gres=gpu:0" \
     "#SBATCH --reservation=r1" "launcher_args=('--cpu-bind=cores' '--mpi=pmix_v4')" \
-    "run_args=(--checkpoint-interval 300)" "master_slot=shared"; do
+    "run_args=(--checkpoint-interval 300 --deadline slurm-60)" "master_slot=shared"; do
     expect_in opts.sh "$want"
 done
 bash -n opts.sh || fail "the script with site options is not valid bash"
@@ -102,10 +102,10 @@ for o in "#SBATCH --cpus-per-task" "#SBATCH --mem" "#SBATCH --qos" "#SBATCH --ex
     "#SBATCH --mail"; do
     grep -qF -- "$o" default.sh && fail "default script has '$o'"
 done
-expect_in default.sh "run_args=()"
+expect_in default.sh "run_args=(--deadline slurm-60)"
 "$EXE" submit "$TINY" --store "$WORK/n1.h5" --dry-run --launcher none --ntasks 3 \
     --launcher-arg=-x --master-slot own >none1.sh 2>none1.err || fail "launcher none"
-expect_in none1.sh "run_args=(--threads 3)"
+expect_in none1.sh "run_args=(--threads 3 --deadline slurm-60)"
 expect_in none1.err "warning: --launcher-arg is ignored with --launcher none"
 expect_in none1.err "warning: --master-slot is ignored with --launcher none"
 "$EXE" submit "$TINY" --store "$WORK/n2.h5" --dry-run --master-slot own --ntasks 4 \
