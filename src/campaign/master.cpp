@@ -138,6 +138,8 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         for (std::size_t i = 0; i < todo.size(); ++i)
             saved_before[i] = ckpt->peek_seconds(key_of(Item{i, 1})).value_or(0.0);
     const bool timed = options_.deadline.has_value();
+    bool told_unmeasured = false;
+    std::set<std::size_t> hopeless;  // tasks warned about: longer than the allocation
     // Seconds this run may compute: from its start to the deadline minus the grace.
     const double allocation =
         timed ? *options_.deadline - store::unix_now() - options_.grace : 1e300;
@@ -368,14 +370,32 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
         bool dispatched = false;
         while (!draining && !idle.empty() && !queue.empty()) {
             // With a deadline: the first task (most expensive first) expected to end in time.
+            // Until something of this campaign is measured the cost model's seconds are a guess
+            // (off by 2x either way); skipping on a guess could start nothing, allocation after
+            // allocation. So the estimate filters only once a result has been measured.
             auto pick = queue.begin();
-            if (timed) {
+            const bool measured = measured_expected > 0 && measured_seconds > 0;
+            if (timed && !measured && !told_unmeasured) {
+                told_unmeasured = true;
+                log_ << "campaign: nothing of this campaign is measured yet: realizations are "
+                        "handed out until the deadline minus the grace, when running ones are "
+                        "stopped; the deadline's estimates start with the first result"
+                     << std::endl;
+            }
+            if (timed && measured) {
                 const double left = seconds_to_deadline() - options_.grace;
                 for (; pick != queue.end(); ++pick) {
                     const TaskRef& t = todo[pick->index];
                     const double need = std::max(
                         0.0, t.expected_seconds * correction() - saved_before[pick->index]);
                     if (need <= left) break;
+                    if (!ckpt && need > allocation && hopeless.insert(pick->index).second)
+                        log_ << "campaign: warning: '" << t.label << "' #" << t.realization
+                             << " is expected to need " << format_duration(need)
+                             << ", more than this allocation's " << format_duration(allocation)
+                             << ", and checkpoints are off: it cannot finish in an allocation "
+                                "this long (raise the time limit or drop --no-checkpoints)"
+                             << std::endl;
                     // Longer than a whole allocation like this one: it can only ever finish in
                     // pieces, so with checkpoints it starts (its state is saved at the
                     // deadline) rather than never.

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "hopper/campaign/checkpoints.hpp"
+#include "hopper/campaign/hybrid.hpp"
 #include "hopper/campaign/inproc_channel.hpp"
 #include "hopper/campaign/mixing.hpp"
 #include "hopper/campaign/mpi.hpp"
@@ -402,17 +403,24 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
                                     opt.sweep.string() + "' (is it on a shared file system?)");
         }
         std::vector<std::string> hosts = mpi->hosts();
-        if (rank == 0 && opt.threads_given)
-            err << "campaign: note: --threads " << opt.threads << " is ignored under mpirun: the "
-                << size - 1 << " worker(s) are ranks 1.." << size - 1
-                << " (start more ranks for more workers)" << std::endl;
+        // Hybrid: --threads T makes every worker rank run T realizations at once (hybrid.hpp).
+        const int per_rank = opt.threads_given ? opt.threads : 1;
+        if (rank == 0 && per_rank > 1)
+            err << "campaign: " << size - 1 << " worker rank(s) x " << per_rank
+                << " threads = " << (size - 1) * per_rank
+                << " workers (store and status number them 1.." << (size - 1) * per_rank
+                << "; rank r runs workers (r-1) x " << per_rank << " + 1..)" << std::endl;
         if (rank != 0) {
             SignalWatcher ignore;  // the master decides; a forwarded signal must not kill us
             auto ch = mpi->worker_channel();
-            run_worker(*ch, make_runner(opt, c), worker_options(opt));
+            if (per_rank > 1)
+                run_hybrid_worker(*ch, per_rank, make_runner(opt, c), worker_options(opt));
+            else
+                run_worker(*ch, make_runner(opt, c), worker_options(opt));
             return 0;
         }
-        auto ch = mpi->master_channel();
+        auto mpi_ch = mpi->master_channel();
+        auto ch = per_rank > 1 ? slotted_master(*mpi_ch, per_rank) : std::move(mpi_ch);
         MasterState state;
         QuitWorkers quit(*ch);
         try {

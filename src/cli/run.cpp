@@ -38,8 +38,8 @@ po::options_description run_options() {
          "after SIGUSR1/SIGINT, seconds running realizations may take to finish before they "
          "are stopped (default 60)")  //
         ("threads", po::value<std::string>()->value_name("N"),
-         "worker threads when not started by mpirun (default 1; under mpirun the workers are "
-         "the ranks 1..N-1 and this is ignored, with a note)")  //
+         "worker threads: without mpirun, of the one process (default 1); under mpirun, of "
+         "every worker rank (hybrid: ranks 1..N-1 each run N realizations at once; default 1)")  //
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //

@@ -61,8 +61,8 @@ po::options_description submit_options() {
         ("template", po::value<std::string>()->value_name("FILE"),
          "render FILE instead of the built-in slurm/hopper.sbatch.in")  //
         ("cpus-per-task", po::value<std::string>()->value_name("N"),
-         "#SBATCH --cpus-per-task=N (each rank simulates on one core: N > 1 leaves cores idle "
-         "unless the launcher's options use them; a warning says so)")  //
+         "#SBATCH --cpus-per-task=N; under srun or mpirun each rank then runs N realizations at "
+         "once (--threads N) unless --threads says otherwise (a warning when they differ)")  //
         ("mem", po::value<std::string>()->value_name("SIZE"),
          "#SBATCH --mem=SIZE per node: a number with an optional unit K, M, G or T (e.g. 4G)")  //
         ("qos", po::value<std::string>()->value_name("Q"), "#SBATCH --qos=Q")                   //
@@ -85,8 +85,9 @@ po::options_description submit_options() {
          "oversubscribed (it sleeps while waiting, 1-2 % of a core): N tasks give N workers; "
          "own: the master takes one of the N tasks (N-1 workers)")  //
         ("threads", po::value<std::string>()->value_name("N"),
-         "with --launcher none: worker threads of the one process (default: --ntasks); under "
-         "srun or mpirun the ranks are the workers and this is ignored, with a warning")  //
+         "worker threads: with --launcher none, of the one process (default: --ntasks); under "
+         "srun or mpirun, of every rank (hybrid: each rank runs N realizations at once; default "
+         "--cpus-per-task, else 1)")  //
         ("checkpoint-interval", po::value<std::string>()->value_name("S"),
          "campaign run --checkpoint-interval S (default 600: running realizations save their "
          "state every S s; 0 = only when stopped)")  //
@@ -414,23 +415,27 @@ int submit_command(const std::vector<std::string>& args) {
                      "process: the master is a thread beside the worker threads)\n";
     if (launcher != "none" && master_slot == "own" && ntasks < 2)
         throw ConfigError("--master-slot own needs --ntasks of at least 2 (1 master + workers)");
-    long threads = ntasks;
-    if (vm.count("threads")) {
-        threads = positive(vm, "threads", 1, 4096);
-        if (launcher != "none")
-            std::cerr << "campaign: warning: --threads is ignored with --launcher " << launcher
-                      << ": every rank runs one realization at a time (hybrid ranks x threads "
-                         "is not implemented); ask for more --ntasks instead\n";
-    }
-    if (!cpus.empty() && cpus != "1")
-        std::cerr << "campaign: warning: --cpus-per-task " << cpus
-                  << ": each rank simulates on one core, so " << (std::stol(cpus) - 1)
-                  << " of every " << cpus << " CPUs stay idle (use --ntasks for more workers)\n";
+    // Worker threads: of the one process (--launcher none; default --ntasks), or of every rank
+    // (hybrid; default 1, or --cpus-per-task when that is given).
+    const long cpt = cpus.empty() ? 1 : std::stol(cpus);
+    long threads = launcher == "none" ? ntasks : cpt;
+    if (vm.count("threads")) threads = positive(vm, "threads", 1, 4096);
+    if (launcher != "none" && threads < cpt)
+        std::cerr << "campaign: warning: --cpus-per-task " << cpt << " with " << threads
+                  << " thread(s) per rank: " << (cpt - threads) << " of every " << cpt
+                  << " CPUs stay idle (give --threads " << cpt << ")\n";
+    if (launcher != "none" && threads > cpt)
+        std::cerr << "campaign: warning: --threads " << threads << " with --cpus-per-task " << cpt
+                  << ": each rank runs " << threads << " realizations on " << cpt
+                  << " CPU(s) (give --cpus-per-task " << threads << ")\n";
+    if (launcher == "none" && !cpus.empty())
+        std::cerr << "campaign: warning: --cpus-per-task is only an #SBATCH line with --launcher "
+                     "none: the one process runs --threads workers\n";
     if (launcher == "none" && ntasks > 1 && !vm.count("threads"))
         std::cerr << "campaign: note: --launcher none: one process with " << ntasks
                   << " worker threads (--ntasks)\n";
     std::string run_args;
-    if (launcher == "none") run_args += "--threads " + std::to_string(threads);
+    if (launcher == "none" || threads > 1) run_args += "--threads " + std::to_string(threads);
     auto add_run = [&](const std::string& a) { run_args += (run_args.empty() ? "" : " ") + a; };
     if (vm["no-checkpoints"].as<bool>()) {
         if (vm.count("checkpoint-interval"))
@@ -506,8 +511,9 @@ int submit_command(const std::vector<std::string>& args) {
         campaign::RunOptions ro;
         ro.sweep = sweep_path;
         ro.store = store;
-        const long workers =
-            launcher == "none" ? threads : (master_slot == "shared" ? ntasks : ntasks - 1);
+        const long workers = launcher == "none"
+                                 ? threads
+                                 : (master_slot == "shared" ? ntasks : ntasks - 1) * threads;
         ro.threads = static_cast<int>(std::max(1L, workers));
         std::ostringstream est;
         campaign::dry_run(ro, est, std::cerr);

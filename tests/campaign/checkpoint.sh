@@ -12,8 +12,9 @@
 #     refused ("other physics") and the realization restarts.
 #  5. --no-checkpoints: the same SIGTERM throws the running realizations' worker time away, and
 #     /runs says how much (lost > 0): the "before" of issue 15.
-#  6. --deadline: one that nothing can meet ends the run at once (exit 4, "the deadline", nothing
-#     started); bad values are refused with the allowed forms.
+#  6. --deadline: before anything is measured realizations start and are stopped, states saved,
+#     at the deadline minus the grace; once durations are measured, none starts that cannot end
+#     in time (the run ends at once, exit 4); bad values are refused with the allowed forms.
 # Usage: checkpoint.sh NP (0 = one process with 2 worker threads; else mpirun -np NP).
 NP=$1
 source "$(dirname "$0")/lib.sh"
@@ -145,17 +146,37 @@ r = json.load(open('st5.out'))['runs'][-1]
 assert r['lost_worker_seconds'] > 0.3 and r['saved_worker_seconds'] == 0, r" ||
     fail "lost worker seconds without checkpoints"
 
-# 6. Deadlines.
+# 6. Deadlines. Nothing measured yet: realizations start and are stopped (states saved) at the
+#    deadline minus the grace; the rest of the campaign then ends identical. Measured (the
+#    reference store, extended by 2 realizations per point), without checkpoints: none is
+#    started that the measured durations say cannot end in time. (With checkpoints one that is
+#    longer than the whole allocation starts anyway: it can only finish in pieces.)
 STORE=$WORK/d.h5
-run_expect 4 dl $(run_cmd "$STORE" --deadline +1 --grace 0.5)
-expect_in dl.err "is expected to finish before it"
+t0=$(date +%s.%N)
+run_expect 4 dl $(run_cmd "$STORE" --deadline +2.5 --grace 1)
+took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+awk -v t="$took" 'BEGIN { exit !(t < 2.5) }' || fail "the deadline run took $took s (deadline 2.5 s)"
+expect_in dl.err "nothing of this campaign is measured yet"
 expect_in dl.err "stopped by the deadline"
 run_expect 0 dst "$EXE" status "$STORE" --json
 "$PY" -c "
 import json
-s = json.load(open('dst.out'))
-assert s['done'] == 0 and s['runs'][-1]['end_reason'] == 'interrupted by the deadline', s" ||
-    fail "deadline run"
+r = json.load(open('dst.out'))['runs'][-1]
+assert r['end_reason'] == 'interrupted by the deadline', r
+assert r['lost_worker_seconds'] == 0 and r['saved_worker_seconds'] > 0, r" || fail "deadline run"
+run_expect 0 dfinish $(run_cmd "$STORE")
+digest "$STORE" d.digest
+same_digests ref.digest d.digest
+sed 's/^realizations = 2$/realizations = 4/' "$SWEEP" >more.toml
+run_expect 4 dm "$EXE" run more.toml --store "$WORK/ref.h5" --progress-interval 0 --deadline +1 \
+    --grace 0.5 --no-checkpoints
+expect_in dm.err "none of the 4 realization(s) left is expected to finish before it"
+expect_in dm.err "and checkpoints are off: it cannot finish in an allocation this long"
+run_expect 0 dmst "$EXE" status "$WORK/ref.h5" --json
+"$PY" -c "
+import json
+s = json.load(open('dmst.out'))
+assert s['done'] == 4 and s['pending'] == 4, s" || fail "a realization started after the measured deadline"
 for bad in tomorrow +5x @ 2026-13-01T00:00:00 slurm; do
     run_expect 2 badd env -u SLURM_JOB_ID "$EXE" run "$SWEEP" --store "$WORK/x.h5" --deadline "$bad"
     expect_in badd.err "--deadline '$bad'"

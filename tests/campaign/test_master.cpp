@@ -526,6 +526,7 @@ TEST(MasterDeadline, NothingStartsThatCannotEndBeforeTheDeadline) {
     MasterOptions opt = Harness::fast_options();
     opt.grace = 0.5;
     opt.deadline = store::unix_now() + 2.0;
+    opt.measured_seconds = opt.measured_expected = 10.0;  // the cost model measured right
     Harness h(
         4, 2,
         [](const TaskRef& t, int, const engine::RunHooks&) {
@@ -544,6 +545,29 @@ TEST(MasterDeadline, NothingStartsThatCannotEndBeforeTheDeadline) {
     EXPECT_NE(h.log.str().find("none of the 4 realization(s) left is expected to finish"),
               std::string::npos)
         << h.log.str();
+}
+
+// Before anything is measured the estimate is a guess: tasks are handed out (else a campaign
+// whose guess is too long would start nothing in any allocation) and stopped at the deadline.
+TEST(MasterDeadline, UnmeasuredEstimatesDoNotKeepTasksFromStarting) {
+    MasterOptions opt = Harness::fast_options();
+    opt.grace = 0.5;
+    opt.deadline = store::unix_now() + 1.5;
+    Harness h(
+        2, 2,
+        [](const TaskRef& t, int, const engine::RunHooks& hooks) {
+            if (!cooperative_sleep(t.task_id == 0 ? 10s : 50ms, hooks))
+                return fake_result(t.seed, engine::Status::failed);
+            return fake_result(t.seed, engine::Status::complete);
+        },
+        opt);
+    h.set_expected(100.0);  // a guess far beyond the deadline
+    const MasterReport rep = h.run();
+    EXPECT_EQ(h.order().size(), 2u);
+    EXPECT_EQ(rep.stored, 1);
+    EXPECT_EQ(rep.interrupted, 1);
+    EXPECT_EQ(rep.stop_reason, "the deadline");
+    EXPECT_NE(h.log.str().find("nothing of this campaign is measured yet"), std::string::npos);
 }
 
 TEST(MasterDeadline, ShortTasksRunAndARunningOneIsStoppedAtTheDeadline) {

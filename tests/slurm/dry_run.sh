@@ -81,7 +81,7 @@ bad "--threads must be between 1 and 4096" --threads 0
 "$EXE" submit "$TINY" --store "$WORK/o.h5" --dry-run --cpus-per-task 2 --mem 4G --qos high \
     --constraint 'haswell&ib' --mail-type END,FAIL --mail-user me@example.org --exclusive \
     --sbatch-arg=--gres=gpu:0 --sbatch-arg=--reservation=r1 --launcher-arg=--cpu-bind=cores \
-    --launcher-arg=--mpi=pmix_v4 --checkpoint-interval 300 --threads 4 >opts.sh 2>opts.err ||
+    --launcher-arg=--mpi=pmix_v4 --checkpoint-interval 300 --threads 1 >opts.sh 2>opts.err ||
     { cat opts.err; fail "dry run with site options"; }
 for want in "#SBATCH --cpus-per-task=2" "#SBATCH --mem=4G" "#SBATCH --qos=high" \
     "#SBATCH --constraint=haswell&ib" "#SBATCH --mail-type=END,FAIL" \
@@ -91,8 +91,7 @@ for want in "#SBATCH --cpus-per-task=2" "#SBATCH --mem=4G" "#SBATCH --qos=high" 
     expect_in opts.sh "$want"
 done
 bash -n opts.sh || fail "the script with site options is not valid bash"
-expect_in opts.err "warning: --cpus-per-task 2: each rank simulates on one core"
-expect_in opts.err "warning: --threads is ignored with --launcher srun"
+expect_in opts.err "warning: --cpus-per-task 2 with 1 thread(s) per rank: 1 of every 2 CPUs stay idle"
 expect_in opts.err "dry run: $TINY on $WORK/o.h5 (new)"
 expect_in opts.err "to run"
 grep -Eq "^total +405 +[0-9.]+$" opts.err || { cat opts.err; fail "no total core-hours"; }
@@ -113,6 +112,14 @@ expect_in none1.err "warning: --master-slot is ignored with --launcher none"
 expect_in own.sh "master_slot=own"
 expect_in own.sh "run_args=(--no-checkpoints --deadline none)"
 expect_in own.err "on 3 workers"
+# Hybrid: --cpus-per-task 4 gives each rank 4 worker threads; --threads beyond it is warned.
+"$EXE" submit "$TINY" --store "$WORK/h.h5" --dry-run --ntasks 2 --cpus-per-task 4 >hy.sh 2>hy.err ||
+    fail "hybrid dry run"
+expect_in hy.sh "run_args=(--threads 4 --deadline slurm-60)"
+expect_in hy.err "on 8 workers"
+grep -q warning hy.err && fail "hybrid with matching --cpus-per-task warned: $(cat hy.err)"
+"$EXE" submit "$TINY" --store "$WORK/h.h5" --dry-run --threads 3 >hy3.sh 2>hy3.err || fail "--threads 3"
+expect_in hy3.err "warning: --threads 3 with --cpus-per-task 1: each rank runs 3 realizations on 1 CPU(s)"
 "$EXE" submit --dry-run >none.out 2>none.err
 [ $? -eq 2 ] && expect_in none.err "missing the sweep file"
 

@@ -39,6 +39,7 @@ struct Message {
     MessageKind kind = MessageKind::quit;
     int task = -1;         // task id (index in config::expand_tasks)
     int attempt = 0;       // 1 for the first try
+    int slot = 0;          // hybrid runs: the worker thread of a rank the message is for/from
     double seconds = 0.0;  // worker wall time of the task (result, interrupted, error)
     store::Bytes payload;  // result: encode_result(); error: the message text
 
