@@ -3,6 +3,7 @@
 
 #include <boost/program_options.hpp>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <thread>
@@ -249,6 +250,11 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         std::cout.flush();
         return code;
     };
+    // SIGUSR1 asks for a drain while the master runs (it installs its own handler then); before
+    // and after that, e.g. while the analysis runs at the end, it must not kill the process
+    // (its default action): under Slurm the warning signal can arrive just as a run that its
+    // deadline ended is finishing (exit 138 before this).
+    std::signal(SIGUSR1, SIG_IGN);
     return campaign::run_campaign(opt, std::cout, std::cerr);
 }
 
