@@ -341,8 +341,14 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
             draining = true;
             report.stopped = true;
             report.stop_reason = stop_.reason();
+            // With a deadline the running realizations were started because they are expected
+            // to end before deadline - grace: a drain (Slurm's warning signal comes with up to a
+            // minute's jitter) lets them go on until then, at least the grace time.
+            const double until =
+                timed ? std::max(options_.grace, seconds_to_deadline() - options_.grace)
+                      : options_.grace;
             drain_deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(options_.grace));
+                                                std::chrono::duration<double>(until));
             if (ckpt && level == StopLevel::drain)
                 for (const auto& [w, b] : busy)
                     channel_.send(
@@ -354,7 +360,7 @@ MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
                     stop_announced = true;
                 } else
                     log_ << "; the " << busy.size() << " running realization(s) may finish within "
-                         << format_duration(options_.grace) << " (signal again to stop them now)";
+                         << format_duration(until) << " (signal again to stop them now)";
             }
             log_ << std::endl;
         }
