@@ -155,7 +155,8 @@ STORE=$WORK/d.h5
 t0=$(date +%s.%N)
 run_expect 4 dl $(run_cmd "$STORE" --deadline +2.5 --grace 1)
 took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
-awk -v t="$took" 'BEGIN { exit !(t < 2.5) }' || fail "the deadline run took $took s (deadline 2.5 s)"
+# (mpirun's start and end add a second or two on a loaded machine: a bound against hanging)
+awk -v t="$took" 'BEGIN { exit !(t < 8) }' || fail "the deadline run took $took s (deadline 2.5 s)"
 expect_in dl.err "nothing of this campaign is measured yet"
 expect_in dl.err "stopped by the deadline"
 run_expect 0 dst "$EXE" status "$STORE" --json
@@ -163,7 +164,8 @@ run_expect 0 dst "$EXE" status "$STORE" --json
 import json
 r = json.load(open('dst.out'))['runs'][-1]
 assert r['end_reason'] == 'interrupted by the deadline', r
-assert r['lost_worker_seconds'] == 0 and r['saved_worker_seconds'] > 0, r" || fail "deadline run"
+assert r['lost_worker_seconds'] == 0 and r['saved_worker_seconds'] > 0, r
+assert json.load(open('dst.out'))['done'] < 4" || fail "deadline run"
 run_expect 0 dfinish $(run_cmd "$STORE")
 digest "$STORE" d.digest
 same_digests ref.digest d.digest
