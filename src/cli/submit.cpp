@@ -268,8 +268,11 @@ void print_submit_help(std::ostream& os) {
           "Submits the campaign of a sweep file to Slurm. The batch script (written next to the\n"
           "store as STORE.sbatch, its log STORE.slurm.log) runs `campaign run` under srun or\n"
           "mpirun, asks Slurm for SIGUSR1 before the time limit, drains on it (running\n"
-          "realizations finish within the grace time and are stored) and resubmits itself\n"
-          "while the store has pending realizations, at most K times. Submitting again resumes.\n\n"
+          "realizations finish within the grace time and are stored, or are stopped with their\n"
+          "state saved in STORE.checkpoints/ to continue in the next allocation) and resubmits\n"
+          "itself while the store has pending realizations, at most K times. The run starts no\n"
+          "realization that cannot end before the warning signal is due (--deadline).\n"
+          "Submitting again resumes.\n\n"
        << submit_options();
 }
 
