@@ -9,11 +9,14 @@
 #include <thread>
 
 #include "hopper/campaign/adaptive.hpp"
+#include "hopper/campaign/checkpoints.hpp"
+#include "hopper/campaign/hybrid.hpp"
 #include "hopper/campaign/inproc_channel.hpp"
 #include "hopper/campaign/mixing.hpp"
 #include "hopper/campaign/mpi.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
+#include "hopper/campaign/running.hpp"
 #include "hopper/campaign/signals.hpp"
 #include "hopper/campaign/worker.hpp"
 #include "hopper/core/error.hpp"
@@ -43,6 +46,8 @@ double expected_seconds(double particle_steps) {
 
 WorkerOptions worker_options(const RunOptions& opt) {
     WorkerOptions w;
+    w.checkpoints = opt.checkpoints;
+    w.checkpoint_interval = opt.checkpoint_interval;
     if (opt.master.worker_timeout)
         w.heartbeat_interval = heartbeat_interval_for(*opt.master.worker_timeout);
     return w;
@@ -86,14 +91,23 @@ Campaign load(const RunOptions& opt) {
     return c;
 }
 
-TaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
-    return [&opt, &c](int task_id, const engine::RunHooks& hooks) {
+ResumableTaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
+    return [&opt, &c](int task_id, std::span<const std::uint8_t> state,
+                      const engine::RunHooks& hooks) {
         if (task_id < 0 || task_id >= static_cast<int>(c.tasks.size()))
             throw std::out_of_range("task id " + std::to_string(task_id) + " is not in the list");
         const config::Task& t = c.tasks[static_cast<std::size_t>(task_id)];
         const engine::SceneParams& scene =
             c.sweep.campaign.points[static_cast<std::size_t>(t.point_index)].scene;
         if (opt.runner) return opt.runner(t, scene, hooks);
+        if (!state.empty()) {
+            try {
+                return engine::resume_realization(scene, t.seed, state, hooks);
+            } catch (const core::ConfigError&) {
+                // The master checked the file's code version and physics; a state the engine
+                // still refuses (another engine format) is dropped: the realization starts over.
+            }
+        }
         return engine::run_realization(scene, t.seed, hooks);
     };
 }
@@ -170,6 +184,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     const auto& spec = c.sweep.campaign;
     const fs::path store_path = opt.store ? *opt.store : spec.store;
     SignalWatcher signals;
+    // Before the store is touched: a deadline that cannot be known is an error.
+    const std::optional<double> deadline = opt.deadline ? opt.deadline(err) : std::nullopt;
     store::Store st(store_path, opt.store_options);
     for (const auto& n : st.notes())
         err << "campaign: note: " << n << '\n';
@@ -229,8 +245,10 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             if (s == store::TaskState::failed) ++totals.failed;
             continue;
         }
+        const store::PointPlan* pp = plan.find(label);
         todo.push_back(TaskRef{t.task_id, label, t.realization, t.seed,
-                               expected_seconds(cost[static_cast<std::size_t>(t.point_index)])});
+                               expected_seconds(cost[static_cast<std::size_t>(t.point_index)]),
+                               pp ? pp->physics_hash() : 0});
     }
     std::stable_sort(todo.begin(), todo.end(), [&](const TaskRef& a, const TaskRef& b) {
         return cost[static_cast<std::size_t>(
@@ -244,8 +262,43 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         << ", " << todo.size() << " to run on " << channel.workers() << " worker"
         << (channel.workers() == 1 ? "" : "s") << std::endl;
 
+    MasterOptions mo = opt.master;
+    std::optional<CheckpointFiles> checkpoints;
+    if (opt.checkpoints) {
+        checkpoints.emplace(store_path, opt.code_version);
+        mo.checkpoints = &*checkpoints;
+        // A checkpoint left by a crash between storing a result and removing its file.
+        for (const auto& t : c.tasks) {
+            const auto& label = spec.points[static_cast<std::size_t>(t.point_index)].label;
+            const store::TaskEntry* e = st.task(label, t.realization);
+            if (e && (e->state == store::TaskState::done || e->state == store::TaskState::failed))
+                checkpoints->remove(CheckpointKey{label, t.realization, t.seed, 0});
+        }
+        checkpoints->remove_dir_if_empty();
+    }
+    mo.running_file = running_path(store_path);
+    mo.deadline = deadline;
+    // The cost model's correction from what this campaign measured so far (every run).
+    if (resumed) {
+        const store::StoreStatus before = st.status();
+        for (const auto& ps : before.points)
+            for (std::size_t p = 0; p < spec.points.size(); ++p)
+                if (spec.points[p].label == ps.label && ps.timed > 0) {
+                    mo.measured_seconds += ps.task_seconds;
+                    mo.measured_expected += ps.timed * expected_seconds(cost[p]);
+                }
+    }
+    if (mo.deadline)
+        err << "campaign: deadline " << format_duration(*mo.deadline - store::unix_now())
+            << " from now (grace " << format_duration(mo.grace) << "): realizations expected to "
+            << "end later are not started (cost model x "
+            << (mo.measured_expected > 0 ? mo.measured_seconds / mo.measured_expected : 1.0)
+            << ", measured on "
+            << (mo.measured_expected > 0 ? "the stored realizations" : "nothing yet") << ")"
+            << std::endl;
+
     state->dispatching = true;
-    Master master(channel, st, signals, opt.master, err);
+    Master master(channel, st, signals, mo, err);
     const MasterReport rep = spec.target ? run_rounds(master, c, store_path, cost, totals, err)
                                          : master.run(todo, totals);
     state->dispatching = false;
@@ -254,7 +307,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     const std::string reason =
         rep.stopped ? "interrupted by " + rep.stop_reason : std::string("complete");
     st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
-                                   rep.cpu_seconds});
+                                   rep.cpu_seconds, rep.lost_worker_seconds,
+                                   rep.saved_worker_seconds});
 
     const store::StoreStatus status = st.status();
     std::vector<std::string> labels;
@@ -283,6 +337,11 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             << " identical, " << rep.late_different << " different" << std::endl;
     const std::string resume = "campaign run " + c.sweep.path.string() +
                                (opt.store ? " --store " + opt.store->string() : std::string());
+    if (rep.interrupted > 0 || rep.resumed > 0)
+        err << "campaign: worker time of interrupted realizations: "
+            << format_duration(rep.saved_worker_seconds) << " kept in checkpoints, "
+            << format_duration(rep.lost_worker_seconds) << " thrown away; " << rep.resumed
+            << " realization(s) continued from a checkpoint" << std::endl;
     if (rep.stopped) {
         err << "campaign: stopped by " << rep.stop_reason << "; " << left + failed
             << " realization(s) not stored yet (" << rep.interrupted
@@ -307,8 +366,83 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
 
 }  // namespace
 
+int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
+    const Campaign c = load(opt);
+    const auto& spec = c.sweep.campaign;
+    const fs::path store_path = opt.store ? *opt.store : spec.store;
+    fs::path journal = store_path;
+    journal += ".journal";
+    store::StoreStatus status;
+    const bool existing = fs::exists(journal);
+    if (existing) {
+        status = store::read_status(store_path);
+        if (status.has_plan) {
+            for (const auto& n : check_compatible(status.plan, make_plan(spec)))
+                err << "campaign: note: " << n << '\n';
+        }
+    }
+    // Measured worker seconds per particle-step over the stored realizations of these points.
+    double measured_s = 0.0, measured_cost = 0.0;
+    std::vector<double> cost(spec.points.size());
+    for (std::size_t p = 0; p < spec.points.size(); ++p) {
+        cost[p] = expected_cost(spec.points[p].scene);
+        for (const auto& ps : status.points)
+            if (ps.label == spec.points[p].label && ps.timed > 0) {
+                measured_s += ps.task_seconds;
+                measured_cost += ps.timed * cost[p];
+            }
+    }
+    const double per_cost = measured_cost > 0 ? measured_s / measured_cost : 50e-9;
+    out << "dry run: " << c.sweep.path.string() << " on " << store_path.string()
+        << (existing ? "" : " (new)") << "; nothing is run or written\n";
+    char line[512];
+    std::snprintf(line, sizeof line, "%-40s %9s %7s %7s %12s %11s\n", "point", "particles",
+                  "stored", "to run", "s/realiz.", "core-hours");
+    out << line;
+    double total_h = 0.0;
+    int total_runs = 0;
+    for (std::size_t p = 0; p < spec.points.size(); ++p) {
+        const auto& pt = spec.points[p];
+        int stored = 0;
+        for (const auto& t : c.tasks) {
+            if (static_cast<std::size_t>(t.point_index) != p) continue;
+            for (const auto& ps : status.points)
+                if (ps.label == pt.label) {
+                    // Stored results (failed ones included) count from the lowest index.
+                    const int results = ps.done + ps.failed - ps.errors;
+                    if (t.realization < results) ++stored;
+                }
+        }
+        const int planned = static_cast<int>(std::count_if(
+            c.tasks.begin(), c.tasks.end(),
+            [&](const config::Task& t) { return static_cast<std::size_t>(t.point_index) == p; }));
+        const int to_run = planned - stored;
+        const double each = cost[p] * per_cost;
+        const double hours = to_run * each / 3600.0;
+        total_h += hours;
+        total_runs += to_run;
+        std::snprintf(line, sizeof line, "%-40s %9d %7d %7d %12.1f %11.3f\n",
+                      pt.label.substr(0, 40).c_str(), pt.scene.particles.count, stored, to_run,
+                      each, hours);
+        out << line;
+    }
+    std::snprintf(line, sizeof line, "%-40s %9s %7s %7d %12s %11.3f\n", "total", "", "", total_runs,
+                  "", total_h);
+    out << line;
+    out << "basis: cost model (particles x steps to settle and empty at the 2-D Beverloo rate) x "
+        << per_cost * 1e9 << " ns per particle-step ("
+        << (measured_cost > 0 ? "measured on the store's realizations of these points"
+                              : "the prior: nothing measured yet")
+        << "); core-hours count worker time only (the master sleeps)\n";
+    const int workers = std::max(1, opt.threads);
+    out << "on " << workers << " worker" << (workers == 1 ? "" : "s") << ": about "
+        << format_duration(total_h * 3600.0 / workers) << " of wall time if the load balances\n";
+    return 0;
+}
+
 int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     if (opt.threads < 1) throw core::ConfigError("--threads must be at least 1");
+    if (opt.dry_run) return dry_run(opt, out, err);
     std::optional<MpiSession> mpi;
     if (launched_by_mpi()) mpi.emplace();
     const int rank = mpi ? mpi->rank() : 0;
@@ -336,17 +470,24 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
                                     opt.sweep.string() + "' (is it on a shared file system?)");
         }
         std::vector<std::string> hosts = mpi->hosts();
-        if (rank == 0 && opt.threads_given)
-            err << "campaign: note: --threads " << opt.threads << " is ignored under mpirun: the "
-                << size - 1 << " worker(s) are ranks 1.." << size - 1
-                << " (start more ranks for more workers)" << std::endl;
+        // Hybrid: --threads T makes every worker rank run T realizations at once (hybrid.hpp).
+        const int per_rank = opt.threads_given ? opt.threads : 1;
+        if (rank == 0 && per_rank > 1)
+            err << "campaign: " << size - 1 << " worker rank(s) x " << per_rank
+                << " threads = " << (size - 1) * per_rank
+                << " workers (store and status number them 1.." << (size - 1) * per_rank
+                << "; rank r runs workers (r-1) x " << per_rank << " + 1..)" << std::endl;
         if (rank != 0) {
             SignalWatcher ignore;  // the master decides; a forwarded signal must not kill us
             auto ch = mpi->worker_channel();
-            run_worker(*ch, make_runner(opt, c), worker_options(opt));
+            if (per_rank > 1)
+                run_hybrid_worker(*ch, per_rank, make_runner(opt, c), worker_options(opt));
+            else
+                run_worker(*ch, make_runner(opt, c), worker_options(opt));
             return 0;
         }
-        auto ch = mpi->master_channel();
+        auto mpi_ch = mpi->master_channel();
+        auto ch = per_rank > 1 ? slotted_master(*mpi_ch, per_rank) : std::move(mpi_ch);
         MasterState state;
         QuitWorkers quit(*ch);
         try {
@@ -373,7 +514,7 @@ int run_campaign(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     // One process: the master here, the workers in threads.
     const Campaign c = load(opt);
     InProcessChannels channels(opt.threads);
-    const TaskRunner runner = make_runner(opt, c);
+    const ResumableTaskRunner runner = make_runner(opt, c);
     std::vector<std::thread> threads;
     for (int i = 0; i < opt.threads; ++i)
         threads.emplace_back(

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace hopper::campaign {
 
@@ -30,27 +31,64 @@ Message error_reply(const Message& task, const std::string& what) {
     return reply;
 }
 
+// Shared by the watching thread and the computing thread, which may outlive the watching loop
+// when told to quit while its realization hangs (it is then left behind, detached).
+struct Shared {
+    std::atomic<bool> stop{false};
+    std::atomic<std::uint64_t> steps{0};
+    // Checkpoints: a request the engine looks at every step; with stop_after_checkpoint the
+    // realization stops right after saving (a drain or a stop).
+    std::atomic<bool> checkpoint_request{false};
+    std::atomic<bool> stop_after_checkpoint{false};
+    std::mutex mutex;
+    std::condition_variable done_cv;
+    bool done = false;
+    Message reply;
+    std::vector<std::uint8_t> state;  // the last state saved and not yet sent
+    bool state_ready = false;
+    double state_seconds = 0.0;  // wall seconds of the task when it was saved
+};
+
 // Runs one task on the calling thread; the reply to send (without its duration).
-Message run_task(const Message& m, const TaskRunner& run, const std::atomic<bool>& stop,
-                 std::atomic<std::uint64_t>& steps) {
+Message run_task(const Message& m, const ResumableTaskRunner& run, Shared& sh,
+                 std::chrono::steady_clock::time_point t0, bool checkpoints) {
     engine::RunHooks hooks;
-    hooks.stop = &stop;
+    hooks.stop = &sh.stop;
     hooks.progress_interval = every_step;
     hooks.on_progress = [&](const engine::Progress&) {
-        steps.fetch_add(1, std::memory_order_relaxed);
-        if (stop.load(std::memory_order_relaxed)) throw Interrupted{};
+        sh.steps.fetch_add(1, std::memory_order_relaxed);
+        if (sh.stop.load(std::memory_order_relaxed)) throw Interrupted{};
     };
+    if (checkpoints) {
+        hooks.checkpoint_request = &sh.checkpoint_request;
+        hooks.on_checkpoint = [&](std::vector<std::uint8_t>&& bytes) {
+            {
+                std::lock_guard lock(sh.mutex);
+                sh.state = std::move(bytes);
+                sh.state_ready = true;
+                sh.state_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+            }
+            if (sh.stop_after_checkpoint.load()) throw Interrupted{};
+        };
+    }
     Message reply = Message::make(MessageKind::result, m.task, m.attempt);
     try {
-        const engine::RealizationResult r = run(m.task, hooks);
+        const engine::RealizationResult r = run(m.task, m.payload, hooks);
         // Stopped early: the engine ends it as failed ("interrupted"). A realization that
         // finished before it saw the request is a result like any other.
-        if (stop && r.status == engine::Status::failed)
+        if (sh.stop && r.status == engine::Status::failed)
             reply.kind = MessageKind::interrupted;
         else
             reply.payload = store::encode_result(r);
     } catch (const Interrupted&) {
         reply.kind = MessageKind::interrupted;
+        if (sh.stop_after_checkpoint.load()) {
+            std::lock_guard lock(sh.mutex);
+            if (sh.state_ready) {
+                reply.payload = std::move(sh.state);
+                sh.state_ready = false;
+            }
+        }
     } catch (const std::exception& e) {
         reply = error_reply(m, e.what());
     } catch (...) {
@@ -66,6 +104,14 @@ double heartbeat_interval_for(double worker_timeout) {
 }
 
 void run_worker(WorkerChannel& channel, const TaskRunner& run, WorkerOptions options) {
+    const ResumableTaskRunner fresh = [&run](int task, std::span<const std::uint8_t>,
+                                             const engine::RunHooks& hooks) {
+        return run(task, hooks);
+    };
+    run_worker(channel, fresh, options);
+}
+
+void run_worker(WorkerChannel& channel, const ResumableTaskRunner& run, WorkerOptions options) {
     const auto beat = std::chrono::duration_cast<Clock::duration>(
         std::chrono::duration<double>(options.heartbeat_interval));
     const auto watch = std::chrono::duration_cast<Clock::duration>(
@@ -75,20 +121,11 @@ void run_worker(WorkerChannel& channel, const TaskRunner& run, WorkerOptions opt
         if (m.kind == MessageKind::quit) return;
         if (m.kind != MessageKind::task) continue;  // a stop_now that came after the task ended
 
-        // Shared with the computing thread, which may outlive this loop when told to quit while
-        // its realization hangs (it is then left behind, detached).
-        struct Shared {
-            std::atomic<bool> stop{false};
-            std::atomic<std::uint64_t> steps{0};
-            std::mutex mutex;
-            std::condition_variable done_cv;
-            bool done = false;
-            Message reply;
-        };
         const auto sh = std::make_shared<Shared>();
         const auto t0 = Clock::now();
-        std::thread compute([sh, m, &run] {
-            Message r = run_task(m, run, sh->stop, sh->steps);
+        const bool checkpoints = options.checkpoints;
+        std::thread compute([sh, m, &run, t0, checkpoints] {
+            Message r = run_task(m, run, *sh, t0, checkpoints);
             {
                 std::lock_guard lock(sh->mutex);
                 sh->reply = std::move(r);
@@ -103,13 +140,44 @@ void run_worker(WorkerChannel& channel, const TaskRunner& run, WorkerOptions opt
         bool quit = false;
         std::uint64_t steps_at_beat = 0;
         auto next_beat = t0 + beat;
+        const auto every = std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double>(options.checkpoint_interval));
+        const bool periodic = options.checkpoints && options.checkpoint_interval > 0;
+        auto next_checkpoint = t0 + every;
         while (!quit && !finished_within(watch)) {
             while (auto msg = channel.poll()) {
-                if (msg->kind == MessageKind::stop_now) sh->stop = true;
+                if (msg->kind == MessageKind::stop_now) {
+                    if (options.checkpoints) {
+                        // Saved at the next time step, then the realization stops.
+                        sh->stop_after_checkpoint = true;
+                        sh->checkpoint_request = true;
+                    } else {
+                        sh->stop = true;
+                    }
+                }
+                if (msg->kind == MessageKind::checkpoint_now && options.checkpoints)
+                    sh->checkpoint_request = true;
                 if (msg->kind == MessageKind::quit) {
                     sh->stop = true;
                     quit = true;
                 }
+            }
+            if (periodic && Clock::now() >= next_checkpoint) {
+                sh->checkpoint_request = true;
+                next_checkpoint = Clock::now() + every;
+            }
+            // A state saved while the realization goes on: to the master, which writes it.
+            if (options.checkpoints && !sh->stop_after_checkpoint) {
+                Message ck = Message::make(MessageKind::checkpoint, m.task, m.attempt);
+                {
+                    std::lock_guard lock(sh->mutex);
+                    if (sh->state_ready && !sh->done) {
+                        ck.payload = std::move(sh->state);
+                        ck.seconds = sh->state_seconds;
+                        sh->state_ready = false;
+                    }
+                }
+                if (!ck.payload.empty()) channel.send(ck);
             }
             // A heartbeat only while the realization advances: a computation that hangs goes
             // silent like a stopped node.

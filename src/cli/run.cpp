@@ -3,15 +3,18 @@
 
 #include <boost/program_options.hpp>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <thread>
 
 #include "cli/analyze.hpp"
+#include "cli/deadline.hpp"
 #include "cli/options.hpp"
 #include "cli/python_tools.hpp"
 #include "hopper/campaign/run.hpp"
 #include "hopper/core/error.hpp"
+#include "hopper/store/records.hpp"
 
 #ifndef HOPPER_VERSION
 #define HOPPER_VERSION "unknown"
@@ -36,8 +39,8 @@ po::options_description run_options() {
          "after SIGUSR1/SIGINT, seconds running realizations may take to finish before they "
          "are stopped (default 60)")  //
         ("threads", po::value<std::string>()->value_name("N"),
-         "worker threads when not started by mpirun (default 1; under mpirun the workers are "
-         "the ranks 1..N-1 and this is ignored, with a note)")  //
+         "worker threads: without mpirun, of the one process (default 1); under mpirun, of "
+         "every worker rank (hybrid: ranks 1..N-1 each run N realizations at once; default 1)")  //
         ("flush-interval", po::value<std::string>()->value_name("S"),
          "seconds between HDF5 flushes while running (default 1; the journal is synced after "
          "every realization regardless)")  //
@@ -51,6 +54,21 @@ po::options_description run_options() {
          "another worker (default: 5 x the realization's expected duration, at least 300)")  //
         ("no-plots", po::bool_switch(),
          "do not draw the figures at the end (campaign plot draws them later)")  //
+        ("deadline", po::value<std::string>()->value_name("T"),
+         "when the run must have ended: realizations the cost model (scaled by the durations "
+         "measured so far) expects to end after T minus --grace are not started, running ones "
+         "are stopped (their states saved) at T minus --grace, and the run exits 4 (resumable). "
+         "T: slurm (the job's end time; the default inside a Slurm job), slurm-S (S seconds "
+         "before it), none, @SECONDS_SINCE_1970, "
+         "2026-11-24T15:00:00Z (UTC), or from now: +3600, +90m, +2h, +1:30:00")  //
+        ("checkpoint-interval", po::value<std::string>()->value_name("S"),
+         "seconds of wall time between checkpoints of each running realization, written beside "
+         "the store in STORE.checkpoints/ (default 600; 0 = only when a realization is stopped)")  //
+        ("no-checkpoints", po::bool_switch(),
+         "no checkpoints: a stopped realization starts over in the next run")  //
+        ("dry-run", po::bool_switch(),
+         "list the realizations to run and the estimated core-hours per point and in total "
+         "(cost model); run and write nothing")  //
         ("allow-mixed", po::bool_switch(),
          "accept new points whose settings, not varied by the sweep, differ from the store's "
          "points (refused by default: the fits would pool different physics)")  //
@@ -69,7 +87,8 @@ double non_negative(const char* option, const std::string& text) {
 void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
           "                    [--threads N] [--flush-interval S] [--worker-timeout S]\n"
-          "                    [--no-file-locking] [--allow-mixed] [--no-plots]\n"
+          "                    [--deadline T] [--checkpoint-interval S] [--no-checkpoints]\n"
+          "                    [--dry-run] [--no-file-locking] [--allow-mixed] [--no-plots]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
@@ -81,7 +100,9 @@ void print_run_help(std::ostream& os) {
           "(campaign plot; not with --no-plots or HOPPER_PLOTS=0).\n\n"
           "Signals: SIGUSR1 or SIGINT: no new realizations, running ones may finish within\n"
           "--grace seconds; SIGTERM or a second signal: stop running ones now. Either way what\n"
-          "finished is stored and the exit code is 4; the same command resumes.\n\n"
+          "finished is stored and the exit code is 4; the same command resumes. A stopped\n"
+          "realization's state is saved in STORE.checkpoints/ (also every --checkpoint-interval\n"
+          "seconds) and continues from there, bit-identical, in the next run.\n\n"
           "exit codes: 0 all stored, 2 bad sweep file or refused store, 1 store or I/O error,\n"
           "            3 finished with failed realizations, 4 stopped by a signal (resumable)\n\n"
        << run_options();
@@ -143,6 +164,40 @@ int run_command(const std::vector<std::string>& args, const std::string& command
             static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
     }
     opt.allow_mixed = vm["allow-mixed"].as<bool>();
+    opt.dry_run = vm["dry-run"].as<bool>();
+    opt.checkpoints = !vm["no-checkpoints"].as<bool>();
+    if (vm.count("checkpoint-interval")) {
+        if (!opt.checkpoints)
+            throw core::ConfigError(
+                "--checkpoint-interval and --no-checkpoints contradict each other: give one");
+        opt.checkpoint_interval =
+            non_negative("--checkpoint-interval", vm["checkpoint-interval"].as<std::string>());
+    }
+    {
+        // Checked now on every rank (a bad value is an error before anything starts); the
+        // Slurm end time is asked for on the master only (no squeue call per rank).
+        const bool given = vm.count("deadline") > 0;
+        const std::string text = given ? vm["deadline"].as<std::string>() : "";
+        const char* job = std::getenv("SLURM_JOB_ID");
+        const bool in_job = job && *job;
+        const bool slurm = text == "slurm" || text.starts_with("slurm-");
+        if (given && !slurm) {
+            const auto d = parse_deadline(text, store::unix_now());
+            if (d) opt.deadline = [d](std::ostream&) { return d; };
+        } else if (given && !in_job) {
+            parse_deadline(text, 0.0);  // throws: not inside a Slurm job (or a bad value)
+        } else if (given || in_job) {
+            opt.deadline = [given, text](std::ostream& err) -> std::optional<double> {
+                if (given) return parse_deadline(text, 0.0);  // throws, naming the reason
+                std::string why;
+                if (auto t = slurm_job_end(&why)) return t;
+                err << "campaign: note: no deadline (" << why
+                    << "); give --deadline to stop starting realizations that cannot finish"
+                    << std::endl;
+                return std::nullopt;
+            };
+        }
+    }
     // Test hook (not for users): HOPPER_STORE_PAUSE=journal_link:<ms> pauses a run that creates
     // a new store's journal before linking it into place (the race of two runs on a new store).
     if (const char* pause = std::getenv("HOPPER_STORE_PAUSE")) {
@@ -195,6 +250,11 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         std::cout.flush();
         return code;
     };
+    // SIGUSR1 asks for a drain while the master runs (it installs its own handler then); before
+    // and after that, e.g. while the analysis runs at the end, it must not kill the process
+    // (its default action): under Slurm the warning signal can arrive just as a run that its
+    // deadline ended is finishing (exit 138 before this).
+    std::signal(SIGUSR1, SIG_IGN);
     return campaign::run_campaign(opt, std::cout, std::cerr);
 }
 

@@ -8,8 +8,10 @@
 #include <map>
 
 #include "cli/json_writer.hpp"
+#include "hopper/campaign/checkpoints.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
+#include "hopper/campaign/running.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
@@ -48,6 +50,17 @@ double iso_to_unix(const std::string& t) {
     std::tm tm{};
     if (!strptime(t.c_str(), "%Y-%m-%dT%H:%M:%SZ", &tm)) return 0.0;
     return static_cast<double>(timegm(&tm));
+}
+
+// The running realizations (the master's STORE.running file) while a run writes the store.
+std::vector<campaign::RunningTask> running_tasks(const store::StoreStatus& s) {
+    if (!s.writer_active) return {};
+    const auto f = campaign::read_running(campaign::running_path(s.store));
+    return f ? f->tasks : std::vector<campaign::RunningTask>{};
+}
+
+int checkpoint_files(const store::StoreStatus& s) {
+    return campaign::CheckpointFiles(s.store, "").count();
 }
 
 }  // namespace
@@ -133,6 +146,20 @@ std::string status_json(const store::StoreStatus& s) {
         w.end_object();
     }
     w.end_array();
+    const double now = store::unix_now();
+    w.key("running").begin_array();
+    for (const auto& t : running_tasks(s)) {
+        w.begin_object_inline();
+        w.field("worker", t.worker);
+        w.field("label", t.label);
+        w.field("realization", t.realization);
+        w.field("attempt", t.attempt);
+        w.field("seconds", std::max(0.0, now - t.start_unix));
+        w.field("resumed", t.resumed);
+        w.end_object();
+    }
+    w.end_array();
+    w.field("checkpoints", checkpoint_files(s));
     w.key("points").begin_array();
     for (const auto& p : s.points) {
         w.begin_object_inline();
@@ -175,6 +202,8 @@ std::string status_json(const store::StoreStatus& s) {
         w.field("workers", r.info.workers);
         w.field_array("hosts", r.info.hosts);
         w.field("stored", r.stored);
+        w.field("lost_worker_seconds", r.end ? r.end->lost_worker_seconds : 0.0);
+        w.field("saved_worker_seconds", r.end ? r.end->saved_worker_seconds : 0.0);
         w.end_object();
     }
     w.end_array();
@@ -209,6 +238,18 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
                 << campaign::format_duration(*pe.eta_seconds) << " on " << pe.workers
                 << " worker(s) (" << pe.basis << ")";
         out << '\n';
+        const auto running = running_tasks(s);
+        if (!running.empty()) {
+            const double now = store::unix_now();
+            for (std::size_t k = 0; k < running.size(); ++k) {
+                const auto& t = running[k];
+                out << (k ? "          " : "running   ") << "worker " << t.worker << ": '"
+                    << t.label << "' #" << t.realization << " for "
+                    << campaign::format_duration(std::max(0.0, now - t.start_unix))
+                    << (t.attempt > 1 ? " (attempt " + std::to_string(t.attempt) + ")" : "")
+                    << (t.resumed ? " (continued from its checkpoint)" : "") << '\n';
+            }
+        }
         if (!pe.busy.empty()) {
             out << "workers   ";
             for (std::size_t k = 0; k < pe.busy.size(); ++k)
@@ -224,7 +265,16 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
             << (r.end ? "ended " + r.end->end_time + " (" + r.end->reason + ")"
                       : std::string(s.writer_active ? "running" : "did not end (killed?)"))
             << ", stored " << r.stored << '\n';
+        if (r.end && (r.end->lost_worker_seconds > 0 || r.end->saved_worker_seconds > 0))
+            out << "          its interrupted realizations: "
+                << campaign::format_duration(r.end->saved_worker_seconds)
+                << " of worker time kept in checkpoints, "
+                << campaign::format_duration(r.end->lost_worker_seconds) << " thrown away\n";
     }
+    if (const int n = checkpoint_files(s); n > 0)
+        out << "checkpts  " << n << " realization(s) have a saved state in "
+            << campaign::CheckpointFiles::dir_for(s.store).string()
+            << " (they continue from it in the next run)\n";
     if (!s.points.empty()) {
         std::size_t width = 5;
         for (const auto& p : s.points)

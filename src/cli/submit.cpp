@@ -13,9 +13,11 @@
 #include <iostream>
 #include <regex>
 #include <sstream>
+#include <vector>
 
 #include "cli/options.hpp"
 #include "cli/simulate.hpp"
+#include "hopper/campaign/run.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 
@@ -35,7 +37,8 @@ po::options_description submit_options() {
          "the store (default: [campaign] store of the sweep file, relative to it)")               //
         ("nodes", po::value<std::string>()->value_name("N"), "nodes per allocation (default 1)")  //
         ("ntasks", po::value<std::string>()->value_name("N"),
-         "MPI ranks per allocation: 1 master + N-1 workers (default 2)")  //
+         "tasks per allocation (default 2): N workers, the master an extra rank beside them "
+         "(--master-slot shared), or 1 master + N-1 workers (--master-slot own)")  //
         ("time", po::value<std::string>()->value_name("T"),
          "time limit of each allocation: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS "
          "(default 1:00:00)")                                                        //
@@ -56,8 +59,47 @@ po::options_description submit_options() {
         ("job-name", po::value<std::string>()->value_name("NAME"),
          "Slurm job name (default: hopper-<campaign name>)")  //
         ("template", po::value<std::string>()->value_name("FILE"),
-         "render FILE instead of the built-in slurm/hopper.sbatch.in")                      //
-        ("dry-run", po::bool_switch(), "print the batch script; write and submit nothing")  //
+         "render FILE instead of the built-in slurm/hopper.sbatch.in")  //
+        ("cpus-per-task", po::value<std::string>()->value_name("N"),
+         "#SBATCH --cpus-per-task=N; under srun or mpirun each rank then runs N realizations at "
+         "once (--threads N) unless --threads says otherwise (a warning when they differ)")  //
+        ("mem", po::value<std::string>()->value_name("SIZE"),
+         "#SBATCH --mem=SIZE per node: a number with an optional unit K, M, G or T (e.g. 4G)")  //
+        ("qos", po::value<std::string>()->value_name("Q"), "#SBATCH --qos=Q")                   //
+        ("constraint", po::value<std::string>()->value_name("EXPR"),
+         "#SBATCH --constraint=EXPR (node features: letters, digits and _ . & | , * [ ] : ( ))")  //
+        ("mail-type", po::value<std::string>()->value_name("TYPES"),
+         "#SBATCH --mail-type=TYPES: comma-separated NONE, BEGIN, END, FAIL, REQUEUE, ALL, "
+         "INVALID_DEPEND, STAGE_OUT, TIME_LIMIT, TIME_LIMIT_90, TIME_LIMIT_80, TIME_LIMIT_50, "
+         "ARRAY_TASKS")                                                                          //
+        ("mail-user", po::value<std::string>()->value_name("ADDR"), "#SBATCH --mail-user=ADDR")  //
+        ("exclusive", po::bool_switch(), "#SBATCH --exclusive (whole nodes)")                    //
+        ("sbatch-arg", po::value<std::vector<std::string>>()->value_name("ARG"),
+         "any other sbatch option, as one #SBATCH line each (repeatable), e.g. "
+         "--sbatch-arg=--gres=gpu:0 --sbatch-arg=--reservation=r1")  //
+        ("launcher-arg", po::value<std::vector<std::string>>()->value_name("ARG"),
+         "an argument added to the srun or mpirun command line (repeatable), e.g. "
+         "--launcher-arg=--cpu-bind=cores; a warning with --launcher none")  //
+        ("master-slot", po::value<std::string>()->value_name("M"),
+         "shared (default): the launcher starts one rank more than --ntasks, the master, "
+         "oversubscribed (it sleeps while waiting, 1-2 % of a core): N tasks give N workers; "
+         "own: the master takes one of the N tasks (N-1 workers)")  //
+        ("threads", po::value<std::string>()->value_name("N"),
+         "worker threads: with --launcher none, of the one process (default: --ntasks); under "
+         "srun or mpirun, of every rank (hybrid: each rank runs N realizations at once; default "
+         "--cpus-per-task, else 1)")  //
+        ("checkpoint-interval", po::value<std::string>()->value_name("S"),
+         "campaign run --checkpoint-interval S (default 600: running realizations save their "
+         "state every S s; 0 = only when stopped)")  //
+        ("no-checkpoints", po::bool_switch(),
+         "campaign run --no-checkpoints (a realization stopped at the limit starts over)")  //
+        ("deadline", po::value<std::string>()->value_name("D"),
+         "slurm (default: campaign run --deadline slurm-(LEAD-GRACE): it starts no realization "
+         "expected to end after the moment the warning signal is due, and stops running ones "
+         "then, saving their states) or none (dispatch ignores the limit)")  //
+        ("dry-run", po::bool_switch(),
+         "print the batch script and, on stderr, the realizations to run and their estimated "
+         "core-hours; write and submit nothing")  //
         ("help,h", "show this help");
     return d;
 }
@@ -217,12 +259,20 @@ void print_submit_help(std::ostream& os) {
           "                       [--partition P] [--account A] [--max-resubmits K]\n"
           "                       [--signal-lead S] [--grace S] [--launcher srun|mpirun|none]\n"
           "                       [--setup FILE] [--job-name NAME] [--template FILE]\n"
-          "                       [--store PATH] [--dry-run]\n\n"
+          "                       [--cpus-per-task N] [--mem SIZE] [--qos Q] [--constraint E]\n"
+          "                       [--mail-type T] [--mail-user A] [--exclusive]\n"
+          "                       [--sbatch-arg ARG]... [--launcher-arg ARG]...\n"
+          "                       [--master-slot shared|own] [--threads N]\n"
+          "                       [--checkpoint-interval S] [--no-checkpoints]\n"
+          "                       [--deadline slurm|none] [--store PATH] [--dry-run]\n\n"
           "Submits the campaign of a sweep file to Slurm. The batch script (written next to the\n"
           "store as STORE.sbatch, its log STORE.slurm.log) runs `campaign run` under srun or\n"
           "mpirun, asks Slurm for SIGUSR1 before the time limit, drains on it (running\n"
-          "realizations finish within the grace time and are stored) and resubmits itself\n"
-          "while the store has pending realizations, at most K times. Submitting again resumes.\n\n"
+          "realizations finish within the grace time and are stored, or are stopped with their\n"
+          "state saved in STORE.checkpoints/ to continue in the next allocation) and resubmits\n"
+          "itself while the store has pending realizations, at most K times. The run starts no\n"
+          "realization that cannot end before the warning signal is due (--deadline).\n"
+          "Submitting again resumes.\n\n"
        << submit_options();
 }
 
@@ -293,6 +343,130 @@ int submit_command(const std::vector<std::string>& args) {
         throw ConfigError("the campaign name makes a bad job name '" + job_name +
                           "': give --job-name");
 
+    // Site options (issue 15).
+    auto matching = [&](const char* name, const std::regex& re, const std::string& allowed) {
+        if (!vm.count(name)) return std::string();
+        const std::string& text = vm[name].as<std::string>();
+        if (!std::regex_match(text, re))
+            throw ConfigError(std::string("--") + name + " must be " + allowed + ", got '" + text +
+                              "'");
+        return text;
+    };
+    const std::string cpus =
+        vm.count("cpus-per-task") ? std::to_string(positive(vm, "cpus-per-task", 1, 4096)) : "";
+    const std::string mem = matching("mem", std::regex("[0-9]{1,12}[KMGT]?"),
+                                     "a number with an optional unit K, M, G or T (e.g. 4G)");
+    const std::string qos = slurm_name(vm, "qos", "");
+    const std::string constraint =
+        matching("constraint", std::regex(R"([A-Za-z0-9_.&|,*\[\]:()]{1,256})"),
+                 "node features: letters, digits and _ . & | , * [ ] : ( )");
+    const std::string mail_type =
+        matching("mail-type",
+                 std::regex("((NONE|BEGIN|END|FAIL|REQUEUE|ALL|INVALID_DEPEND|STAGE_OUT|TIME_"
+                            "LIMIT|TIME_LIMIT_90|TIME_LIMIT_80|TIME_LIMIT_50|ARRAY_TASKS),?)+"),
+                 "a comma-separated list of NONE, BEGIN, END, FAIL, REQUEUE, ALL, "
+                 "INVALID_DEPEND, STAGE_OUT, TIME_LIMIT, TIME_LIMIT_90, TIME_LIMIT_80, "
+                 "TIME_LIMIT_50, ARRAY_TASKS");
+    const std::string mail_user =
+        matching("mail-user", std::regex(R"([A-Za-z0-9._%+-]{1,64}(@[A-Za-z0-9.-]{1,190})?)"),
+                 "a user name or e-mail address");
+    if (!mail_user.empty() && mail_type.empty())
+        std::cerr << "campaign: warning: --mail-user without --mail-type: Slurm mails only what "
+                     "the site's default mail type says (give --mail-type END,FAIL, say)\n";
+    if (!mail_type.empty() && mail_user.empty())
+        std::cerr << "campaign: note: --mail-type without --mail-user: mail goes to the "
+                     "submitting user\n";
+    auto no_newline = [](const std::string& option, const std::string& a) {
+        if (a.empty() || a.find_first_of(std::string("\n\r\0'", 4)) != std::string::npos)
+            throw ConfigError(option +
+                              " must be one non-empty argument without quotes or "
+                              "newlines, got '" +
+                              a + "'");
+    };
+    std::string sbatch_args;
+    if (vm.count("sbatch-arg"))
+        for (const std::string& a : vm["sbatch-arg"].as<std::vector<std::string>>()) {
+            no_newline("--sbatch-arg", a);
+            if (!a.starts_with("-"))
+                throw ConfigError("--sbatch-arg must be an sbatch option starting with '-', got '" +
+                                  a + "'");
+            for (const char* own : {"--signal", "--output", "--open-mode", "--job-name",
+                                    "--dependency", "-o", "-J", "-d"})
+                if (a == own || a.starts_with(std::string(own) + "=") ||
+                    (std::string(own).size() == 2 && a.starts_with(own)))
+                    throw ConfigError("--sbatch-arg '" + a +
+                                      "' would override what the template needs (" + own +
+                                      "); use the first-class option or --template");
+            sbatch_args += (sbatch_args.empty() ? "" : "\n#SBATCH ") + a;
+        }
+    std::string launcher_args;
+    if (vm.count("launcher-arg")) {
+        for (const std::string& a : vm["launcher-arg"].as<std::vector<std::string>>()) {
+            no_newline("--launcher-arg", a);
+            launcher_args += (launcher_args.empty() ? "'" : " '") + a + "'";
+        }
+        if (launcher == "none")
+            std::cerr << "campaign: warning: --launcher-arg is ignored with --launcher none (no "
+                         "launcher runs)\n";
+    }
+    const std::string master_slot =
+        vm.count("master-slot") ? vm["master-slot"].as<std::string>() : "shared";
+    if (master_slot != "shared" && master_slot != "own")
+        throw ConfigError("--master-slot must be shared or own, got '" + master_slot + "'");
+    if (launcher == "none" && vm.count("master-slot"))
+        std::cerr << "campaign: warning: --master-slot is ignored with --launcher none (one "
+                     "process: the master is a thread beside the worker threads)\n";
+    if (launcher != "none" && master_slot == "own" && ntasks < 2)
+        throw ConfigError("--master-slot own needs --ntasks of at least 2 (1 master + workers)");
+    // Worker threads: of the one process (--launcher none; default --ntasks), or of every rank
+    // (hybrid; default 1, or --cpus-per-task when that is given).
+    const long cpt = cpus.empty() ? 1 : std::stol(cpus);
+    long threads = launcher == "none" ? ntasks : cpt;
+    if (vm.count("threads")) threads = positive(vm, "threads", 1, 4096);
+    if (launcher != "none" && threads < cpt)
+        std::cerr << "campaign: warning: --cpus-per-task " << cpt << " with " << threads
+                  << " thread(s) per rank: " << (cpt - threads) << " of every " << cpt
+                  << " CPUs stay idle (give --threads " << cpt << ")\n";
+    if (launcher != "none" && threads > cpt)
+        std::cerr << "campaign: warning: --threads " << threads << " with --cpus-per-task " << cpt
+                  << ": each rank runs " << threads << " realizations on " << cpt
+                  << " CPU(s) (give --cpus-per-task " << threads << ")\n";
+    if (launcher == "none" && !cpus.empty())
+        std::cerr << "campaign: warning: --cpus-per-task is only an #SBATCH line with --launcher "
+                     "none: the one process runs --threads workers\n";
+    if (launcher == "none" && ntasks > 1 && !vm.count("threads"))
+        std::cerr << "campaign: note: --launcher none: one process with " << ntasks
+                  << " worker threads (--ntasks)\n";
+    std::string run_args;
+    if (launcher == "none" || threads > 1) run_args += "--threads " + std::to_string(threads);
+    auto add_run = [&](const std::string& a) { run_args += (run_args.empty() ? "" : " ") + a; };
+    if (vm["no-checkpoints"].as<bool>()) {
+        if (vm.count("checkpoint-interval"))
+            throw ConfigError(
+                "--checkpoint-interval and --no-checkpoints contradict each other: give one");
+        add_run("--no-checkpoints");
+    } else if (vm.count("checkpoint-interval")) {
+        const double ci =
+            parse_finite("--checkpoint-interval", vm["checkpoint-interval"].as<std::string>());
+        if (ci < 0) throw ConfigError("--checkpoint-interval must be >= 0");
+        std::ostringstream t;
+        t << ci;
+        add_run("--checkpoint-interval " + t.str());
+    }
+    {
+        // The run's deadline: when Slurm's warning signal is due (the end time minus the lead)
+        // plus the grace, so that what the master starts ends before the signal would drain it.
+        const std::string d = vm.count("deadline") ? vm["deadline"].as<std::string>() : "slurm";
+        if (d != "slurm" && d != "none")
+            throw ConfigError(
+                "--deadline must be slurm or none for submit (the job's end "
+                "time, or no time-aware dispatch), got '" +
+                d + "'");
+        std::ostringstream t;
+        t << (static_cast<double>(lead) - grace);
+        add_run(d == "none" ? "--deadline none" : "--deadline slurm-" + t.str());
+    }
+
     std::ostringstream grace_text;
     grace_text << grace;
     const std::map<std::string, std::string> values{
@@ -312,6 +486,17 @@ int submit_command(const std::vector<std::string>& args) {
         {"GRACE", grace_text.str()},
         {"MAX_RESUBMITS", std::to_string(max_resubmits)},
         {"SETUP", setup},
+        {"CPUS_PER_TASK", cpus},
+        {"MEM", mem},
+        {"QOS", qos},
+        {"CONSTRAINT", constraint},
+        {"MAIL_TYPE", mail_type},
+        {"MAIL_USER", mail_user},
+        {"EXCLUSIVE", vm["exclusive"].as<bool>() ? "--exclusive" : ""},
+        {"SBATCH_ARGS", sbatch_args},
+        {"LAUNCHER_ARGS", launcher_args},
+        {"MASTER_SLOT", master_slot},
+        {"RUN_ARGS", run_args},
     };
     quoted("the log's path", log);  // #SBATCH --output= takes no quotes: no spaces either
     if (log.string().find_first_of(" \t%") != std::string::npos)
@@ -324,6 +509,18 @@ int submit_command(const std::vector<std::string>& args) {
 
     if (vm["dry-run"].as<bool>()) {
         std::cout << text;
+        std::cout.flush();
+        // What the batch job would run, and its cost (campaign run --dry-run), on stderr.
+        campaign::RunOptions ro;
+        ro.sweep = sweep_path;
+        ro.store = store;
+        const long workers = launcher == "none"
+                                 ? threads
+                                 : (master_slot == "shared" ? ntasks : ntasks - 1) * threads;
+        ro.threads = static_cast<int>(std::max(1L, workers));
+        std::ostringstream est;
+        campaign::dry_run(ro, est, std::cerr);
+        std::cerr << est.str();
         return 0;
     }
     const fs::path sbatch = on_path("sbatch");

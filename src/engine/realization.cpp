@@ -9,6 +9,7 @@
 #include "hopper/core/error.hpp"
 #include "hopper/core/random.hpp"
 #include "hopper/engine/arch.hpp"
+#include "hopper/engine/checkpoint.hpp"
 #include "hopper/engine/fields.hpp"
 #include "hopper/engine/scene.hpp"
 #include "hopper/engine/system.hpp"
@@ -157,6 +158,9 @@ struct Realization::Impl {
     // The detector region is |x| < half_gap, y_region < y < y_outlet: below the edge disks
     // (y_outlet = 0 and half_gap = D/2 in the default geometry).
     double y_region = 0.0, y_outlet = 0.0, half_gap = 0.0;
+    // Settling: simulated time since which the kinetic energy has stayed below the threshold
+    // (-1: it is above). A member, not a local, so that a checkpoint carries it.
+    double below_since = -1.0;
 
     Impl(const SceneParams& params, std::uint64_t seed, RunHooks h)
         : p(params), hooks(std::move(h)), rng(seed), wall_start(Clock::now()) {
@@ -343,11 +347,149 @@ struct Realization::Impl {
 
     bool stop_requested() const { return hooks.stop && hooks.stop->load(); }
 
+    // ----- checkpoints (checkpoint.hpp) -------------------------------------------------
+    // Called between two time steps, where the state is whole.
+    void maybe_checkpoint() {
+        if (!hooks.checkpoint_request || !hooks.on_checkpoint) return;
+        if (!hooks.checkpoint_request->load(std::memory_order_relaxed)) return;
+        hooks.checkpoint_request->store(false);
+        hooks.on_checkpoint(save_state());
+    }
+
+    // What a state must agree on with the realization it is restored into.
+    void put_fingerprint(StateWriter& w) const {
+        w.put(res.seed);
+        w.put(p.particles.count);
+        w.put(static_cast<std::int32_t>(p.integrator.scheme));
+        w.put(c.dt);
+        w.put(c.k_n);
+        w.put<std::uint8_t>(p.fields.enabled);
+    }
+
+    void check_fingerprint(StateReader& r) const {
+        std::ostringstream why;
+        const auto seed = r.get<std::uint64_t>();
+        const auto count = r.get<int>();
+        const auto scheme = r.get<std::int32_t>();
+        const auto dt = r.get<double>();
+        const auto k_n = r.get<double>();
+        const bool fields_on = r.get<std::uint8_t>() != 0;
+        if (seed != res.seed) why << " seed " << seed << " (this realization: " << res.seed << ")";
+        if (count != p.particles.count)
+            why << " particles " << count << " (this realization: " << p.particles.count << ")";
+        if (scheme != static_cast<std::int32_t>(p.integrator.scheme)) why << " another integrator";
+        if (dt != c.dt) why << " dt " << dt << " s (this realization: " << c.dt << " s)";
+        if (k_n != c.k_n) why << " k_n " << k_n << " N/m (this realization: " << c.k_n << " N/m)";
+        if (fields_on != p.fields.enabled)
+            why << " fields " << (fields_on ? "on" : "off")
+                << " (this realization: " << (p.fields.enabled ? "on" : "off") << ")";
+        if (!why.str().empty())
+            throw core::ConfigError("the checkpoint belongs to another realization:" + why.str());
+    }
+
+    std::vector<std::uint8_t> save_state() const {
+        StateWriter w;
+        w.put_string("HOPPERRS");
+        w.put(state_format_version);
+        put_fingerprint(w);
+        w.put(static_cast<std::int32_t>(phase));
+        w.put(static_cast<std::int32_t>(flow));
+        w.put(std::chrono::duration<double>(Clock::now() - wall_start).count());
+        w.put(particle_steps);
+        w.put(td);
+        w.put(flow_start);
+        w.put(last_occupied);
+        w.put(check_start);
+        w.put(shake_start);
+        w.put(shakes_this_jam);
+        w.put<std::uint64_t>(jammed.size());
+        for (const auto& [on, off] : jammed) {
+            w.put(on);
+            w.put(off);
+        }
+        w.put_vector(exit_mass);
+        w.put(step_count);
+        w.put(next_snapshot);
+        w.put(next_progress);
+        w.put(below_since);
+        // Issue 13: the avalanche count's base, the steady state's insertion height and its
+        // generator (draws positions of re-inserted particles).
+        w.put(interval_base);
+        w.put(insert_base);
+        std::uint64_t rs[4];
+        rng.state(rs);
+        for (std::uint64_t v : rs)
+            w.put(v);
+        save_result(res, w);
+        CheckpointAccess::save(*sys, w);
+        w.put<std::uint8_t>(fields != nullptr);
+        if (fields) CheckpointAccess::save(*fields, w);
+        return w.take();
+    }
+
+    void restore_state(std::span<const std::uint8_t> bytes) {
+        static const std::uint8_t magic[16] = {8,   0,   0,   0,   0,   0,   0,   0,
+                                               'H', 'O', 'P', 'P', 'E', 'R', 'R', 'S'};
+        if (bytes.size() < 16 || !std::equal(magic, magic + 16, bytes.begin()))
+            throw core::ConfigError("the checkpoint is not a hopper realization state");
+        StateReader r(bytes);
+        r.get_string();
+        const auto version = r.get<std::uint32_t>();
+        if (version != state_format_version)
+            throw core::ConfigError("the checkpoint has state format " + std::to_string(version) +
+                                    "; this engine reads format " +
+                                    std::to_string(state_format_version));
+        check_fingerprint(r);
+        const auto ph = r.get<std::int32_t>();
+        const auto fl = r.get<std::int32_t>();
+        if (ph < 0 || ph > 2 || fl < 0 || fl > 3) StateReader::fail();
+        phase = static_cast<Phase>(ph);
+        flow = static_cast<Flow>(fl);
+        const double elapsed = r.get<double>();
+        wall_start = Clock::now() - std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(elapsed));
+        particle_steps = r.get<double>();
+        td = r.get<double>();
+        flow_start = r.get<double>();
+        last_occupied = r.get<double>();
+        check_start = r.get<double>();
+        shake_start = r.get<double>();
+        shakes_this_jam = r.get<int>();
+        const auto n_jammed = r.get<std::uint64_t>();
+        if (n_jammed > (std::uint64_t(1) << 32)) StateReader::fail();
+        jammed.clear();
+        for (std::uint64_t k = 0; k < n_jammed; ++k) {
+            const double on = r.get<double>();
+            const double off = r.get<double>();
+            jammed.emplace_back(on, off);
+        }
+        r.get_vector(exit_mass);
+        step_count = r.get<std::int64_t>();
+        next_snapshot = r.get<double>();
+        next_progress = r.get<double>();
+        below_since = r.get<double>();
+        interval_base = r.get<int>();
+        insert_base = r.get<double>();
+        std::uint64_t rs[4];
+        for (std::uint64_t& v : rs)
+            v = r.get<std::uint64_t>();
+        rng.set_state(rs);
+        restore_result(res, r);
+        CheckpointAccess::restore(*sys, r);
+        fields.reset();
+        if (r.get<std::uint8_t>()) {
+            if (!p.fields.enabled) StateReader::fail();
+            start_fields();  // the grid and k_field from the parameters; the state below
+            CheckpointAccess::restore(*fields, r);
+        }
+        if (!r.at_end()) StateReader::fail();
+    }
+
     // ----- settle (step 2) --------------------------------------------------------------
     void settle() {
         const double threshold = p.protocol.settle_ke * c.m_large * p.gravity * p.particles.d_large;
-        double below_since = -1.0;
         while (true) {
+            maybe_checkpoint();
             step();
             ++res.diagnostics.settle_steps;
             if (step_count % k_settle != 0) continue;
@@ -585,6 +727,7 @@ struct Realization::Impl {
         const double until = td + seconds;
         const int empty_at = p.protocol.empty_threshold;
         while (!ended() && td < until) {
+            maybe_checkpoint();
             if (flow == Flow::shaking) drive_walls();
             step();
             if (flow == Flow::shaking) {
@@ -737,11 +880,33 @@ Phase Realization::phase() const {
     return impl_->phase;
 }
 
+std::vector<std::uint8_t> Realization::save_state() const {
+    return impl_->save_state();
+}
+
+void Realization::restore_state(std::span<const std::uint8_t> bytes) {
+    impl_->restore_state(bytes);
+}
+
 RealizationResult run_realization(const SceneParams& params, std::uint64_t seed,
                                   const RunHooks& hooks) {
     Realization r(params, seed, hooks);
     r.settle();
     r.open();
+    while (r.advance(std::numeric_limits<double>::infinity())) {
+    }
+    return r.result();
+}
+
+RealizationResult resume_realization(const SceneParams& params, std::uint64_t seed,
+                                     std::span<const std::uint8_t> state, const RunHooks& hooks) {
+    Realization r(params, seed, hooks);
+    r.restore_state(state);
+    // A state saved while settling continues the settling; one saved later is past the opening.
+    if (r.phase() == Phase::settle) {
+        r.settle();
+        r.open();
+    }
     while (r.advance(std::numeric_limits<double>::infinity())) {
     }
     return r.result();

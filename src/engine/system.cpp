@@ -816,6 +816,11 @@ void System::build_pairs() {
         }
     }
     wstart_[n] = int(wj_.size());
+    pair_constants();
+}
+
+void System::pair_constants() {
+    const std::size_t n = x_.size();
     pmbar_.resize(pj_.size());
     wmbar_.resize(wj_.size());
     for (std::size_t i = 0; i < n; ++i) {

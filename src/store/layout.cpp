@@ -703,6 +703,12 @@ const std::vector<TableColumn>& runs_columns() {
         {"stored", Kind::i32, "1", "realizations this run stored"},
         {"wall_seconds", Kind::f64, "s", "duration of the run"},
         {"master_cpu_seconds", Kind::f64, "s", "CPU time the master used"},
+        {"lost_worker_seconds", Kind::f64, "s",
+         "worker time of realizations interrupted by this run that no checkpoint keeps (thrown "
+         "away: computed again later)"},
+        {"saved_worker_seconds", Kind::f64, "s",
+         "worker time of realizations interrupted by this run kept in checkpoints (continued "
+         "later)"},
     };
     return c;
 }
@@ -1105,8 +1111,17 @@ struct Writer::Impl {
         auto open_table = [&](Table& t, const h5::Id& g, const std::vector<TableColumn>& defs) {
             t.defs = &defs;
             t.ds.clear();
-            for (const auto& c : defs)
+            for (const auto& c : defs) {
+                // A column added later (the runs table's worker seconds, issue 15) is created
+                // in a file written before it; write_runs fills it for every row.
+                if (&defs == &runs_columns() && !h5::exists(g, c.name)) {
+                    h5::Id ds = h5::create_column(g, c.name, types.file_type(c.kind), row_chunk);
+                    describe(ds, c.units, c.description);
+                    t.ds.push_back(std::move(ds));
+                    continue;
+                }
                 t.ds.push_back(h5::open_dataset(g, c.name));
+            }
         };
         open_table(points, g_points, points_columns());
         open_table(tasks, g_tasks, tasks_columns());
@@ -1204,6 +1219,10 @@ struct Writer::Impl {
             std::get<std::vector<std::int32_t>>(b[12]).push_back(r.stored);
             std::get<std::vector<double>>(b[13]).push_back(r.end ? fin(r.end->wall_seconds) : 0.0);
             std::get<std::vector<double>>(b[14]).push_back(r.end ? fin(r.end->master_cpu_seconds)
+                                                                 : 0.0);
+            std::get<std::vector<double>>(b[15]).push_back(r.end ? fin(r.end->lost_worker_seconds)
+                                                                 : 0.0);
+            std::get<std::vector<double>>(b[16]).push_back(r.end ? fin(r.end->saved_worker_seconds)
                                                                  : 0.0);
         }
         write_table(runs, b, "runs");

@@ -174,6 +174,8 @@ Bytes encode(const RunEndRecord& r) {
     w.i32(r.stored);
     w.f64(r.wall_seconds);
     w.f64(r.master_cpu_seconds);
+    w.f64(r.lost_worker_seconds);
+    w.f64(r.saved_worker_seconds);
     return w.take();
 }
 
@@ -185,6 +187,10 @@ RunEndRecord decode_run_end(std::span<const std::uint8_t> b) {
     r.stored = in.i32();
     r.wall_seconds = in.f64();
     r.master_cpu_seconds = in.f64();
+    if (in.remaining() > 0) {  // absent in records written before issue 15
+        r.lost_worker_seconds = in.f64();
+        r.saved_worker_seconds = in.f64();
+    }
     in.expect_end();
     return r;
 }

@@ -140,6 +140,12 @@ class Harness {
     }
     store::Store& store() { return store_; }
 
+    // The cost model's expected seconds of every task (0 = unknown by default).
+    void set_expected(double seconds) {
+        for (auto& t : todo_)
+            t.expected_seconds = seconds;
+    }
+
     ManualStop stop;
     std::ostringstream log;
 
@@ -511,6 +517,88 @@ TEST(Worker, StaleStopRequestsAreIgnored) {
     EXPECT_EQ(store::decode_result(reply->second.payload).seed, 5u);
     ch.master().send(1, Message::make(MessageKind::quit));
     worker.join();
+}
+
+// Time-aware dispatch (issue 15): with a deadline, a task is handed out only if the cost model
+// (scaled by what this run measures) says it ends before deadline - grace; none is started when
+// none can, and running ones are stopped at deadline - grace.
+TEST(MasterDeadline, NothingStartsThatCannotEndBeforeTheDeadline) {
+    MasterOptions opt = Harness::fast_options();
+    opt.grace = 0.5;
+    opt.deadline = store::unix_now() + 2.0;
+    opt.measured_seconds = opt.measured_expected = 10.0;  // the cost model measured right
+    Harness h(
+        4, 2,
+        [](const TaskRef& t, int, const engine::RunHooks&) {
+            return fake_result(t.seed, engine::Status::complete);
+        },
+        opt);
+    h.set_expected(5.0);  // each needs 5 s; 1.5 s are left
+    const auto t0 = std::chrono::steady_clock::now();
+    const MasterReport rep = h.run();
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+    EXPECT_TRUE(rep.stopped);
+    EXPECT_EQ(rep.stop_reason, "the deadline");
+    EXPECT_EQ(rep.deadline_skipped, 4);
+    EXPECT_EQ(rep.stored, 0);
+    EXPECT_TRUE(h.order().empty());
+    EXPECT_NE(h.log.str().find("none of the 4 realization(s) left is expected to finish"),
+              std::string::npos)
+        << h.log.str();
+}
+
+// Before anything is measured the estimate is a guess: tasks are handed out (else a campaign
+// whose guess is too long would start nothing in any allocation) and stopped at the deadline.
+TEST(MasterDeadline, UnmeasuredEstimatesDoNotKeepTasksFromStarting) {
+    MasterOptions opt = Harness::fast_options();
+    opt.grace = 0.5;
+    opt.deadline = store::unix_now() + 1.5;
+    Harness h(
+        2, 2,
+        [](const TaskRef& t, int, const engine::RunHooks& hooks) {
+            if (!cooperative_sleep(t.task_id == 0 ? 10s : 50ms, hooks))
+                return fake_result(t.seed, engine::Status::failed);
+            return fake_result(t.seed, engine::Status::complete);
+        },
+        opt);
+    h.set_expected(100.0);  // a guess far beyond the deadline
+    const MasterReport rep = h.run();
+    EXPECT_EQ(h.order().size(), 2u);
+    EXPECT_EQ(rep.stored, 1);
+    EXPECT_EQ(rep.interrupted, 1);
+    EXPECT_EQ(rep.stop_reason, "the deadline");
+    EXPECT_NE(h.log.str().find("nothing of this campaign is measured yet"), std::string::npos);
+}
+
+TEST(MasterDeadline, ShortTasksRunAndARunningOneIsStoppedAtTheDeadline) {
+    MasterOptions opt = Harness::fast_options();
+    opt.grace = 0.5;
+    opt.deadline = store::unix_now() + 1.5;
+    // Task 0 hangs on (cooperatively) far beyond the deadline; the others take 50 ms.
+    Harness h(
+        4, 2,
+        [](const TaskRef& t, int, const engine::RunHooks& hooks) {
+            if (!cooperative_sleep(t.task_id == 0 ? 10s : 50ms, hooks))
+                return fake_result(t.seed, engine::Status::failed);
+            return fake_result(t.seed, engine::Status::complete);
+        },
+        opt);
+    h.set_expected(0.01);
+    const auto t0 = std::chrono::steady_clock::now();
+    const MasterReport rep = h.run();
+    const double took =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_GT(took, 0.8);  // stopped at deadline - grace (1.0 s), not before ...
+    EXPECT_LT(took, 1.5);  // ... and before the deadline itself
+    EXPECT_TRUE(rep.stopped);
+    EXPECT_EQ(rep.stop_reason, "the deadline");
+    EXPECT_EQ(rep.stored, 3);
+    EXPECT_EQ(rep.interrupted, 1);
+    // No checkpoints here: the stopped task's worker time is thrown away, and counted.
+    EXPECT_GT(rep.lost_worker_seconds, 0.8);
+    EXPECT_EQ(rep.saved_worker_seconds, 0.0);
+    ASSERT_NE(h.entry(0), nullptr);
+    EXPECT_EQ(h.entry(0)->state, store::TaskState::pending);
 }
 
 }  // namespace

@@ -3,9 +3,13 @@
 // an MPI implementation (mpi.hpp, the only code that includes <mpi.h>) and an in-process one
 // (inproc_channel.hpp: threads, for the single-process run and for tests without mpirun).
 //
-// master -> worker: task (task id, attempt), stop_now (end the running task early), quit
-// worker -> master: result (encoded RealizationResult), interrupted (stopped early: no result),
-//                   error (an exception's message), heartbeat (the running task advances)
+// master -> worker: task (task id, attempt; payload: the engine state to resume from, or empty),
+//                   stop_now (end the running task early, after saving its state when
+//                   checkpoints are on), checkpoint_now (save the running task's state), quit
+// worker -> master: result (encoded RealizationResult), interrupted (stopped early: no result;
+//                   payload: its engine state when checkpoints are on), error (an exception's
+//                   message), heartbeat (the running task advances), checkpoint (payload: the
+//                   running task's engine state; seconds: worker time it holds)
 // Only task ids travel: every process expands the same task list from the same sweep file.
 
 #include <chrono>
@@ -27,12 +31,15 @@ enum class MessageKind : std::uint8_t {
     interrupted = 5,
     error = 6,
     heartbeat = 7,
+    checkpoint = 8,
+    checkpoint_now = 9,
 };
 
 struct Message {
     MessageKind kind = MessageKind::quit;
     int task = -1;         // task id (index in config::expand_tasks)
     int attempt = 0;       // 1 for the first try
+    int slot = 0;          // hybrid runs: the worker thread of a rank the message is for/from
     double seconds = 0.0;  // worker wall time of the task (result, interrupted, error)
     store::Bytes payload;  // result: encode_result(); error: the message text
 

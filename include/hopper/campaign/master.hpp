@@ -17,12 +17,14 @@
 
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "hopper/campaign/channel.hpp"
+#include "hopper/campaign/checkpoints.hpp"
 #include "hopper/campaign/signals.hpp"
 #include "hopper/store/store.hpp"
 
@@ -34,6 +36,7 @@ struct TaskRef {
     int realization = 0;
     std::uint64_t seed = 0;
     double expected_seconds = 0.0;  // from the cost model (plan.hpp); 0: unknown
+    std::uint64_t physics = 0;      // the point's physics hash (checkpoint files)
 };
 
 struct MasterOptions {
@@ -47,6 +50,22 @@ struct MasterOptions {
     std::optional<double> worker_timeout;
     double worker_timeout_factor = 5.0;
     double min_worker_timeout = 300.0;
+    // Checkpoint files (checkpoints.hpp; not owned): states of interrupted realizations are
+    // written there, a task with a usable file resumes from it, the file of a stored result is
+    // removed. Null: no checkpoints (an interrupted realization starts over).
+    CheckpointFiles* checkpoints = nullptr;
+    // Time-aware dispatch: seconds since 1970 by which the run must have ended. A task is handed
+    // out only if its expected duration (the cost model times the measured correction below)
+    // ends before deadline - grace; at deadline - grace running tasks are stopped (and
+    // checkpointed). When nothing more fits, the run ends as stopped ("the deadline").
+    std::optional<double> deadline;
+    // Correction of the cost model: measured worker seconds per expected second of the
+    // realizations stored so far in this campaign (updated with every result of this run).
+    // Before anything is measured the cost model's own, pessimistic, seconds (factor 1).
+    double measured_seconds = 0.0;
+    double measured_expected = 0.0;
+    // A small file beside the store naming the running realizations (running.hpp); empty: none.
+    std::filesystem::path running_file;
 };
 
 struct MasterReport {
@@ -64,6 +83,13 @@ struct MasterReport {
     std::string stop_reason;
     double wall_seconds = 0.0;
     double cpu_seconds = 0.0;  // CPU time of the master's thread
+    // Worker seconds of interrupted realizations that no checkpoint keeps (they are computed
+    // again), and those kept in checkpoints (continued later).
+    double lost_worker_seconds = 0.0;
+    double saved_worker_seconds = 0.0;
+    int checkpoints_written = 0;
+    int resumed = 0;           // tasks started from a checkpoint
+    int deadline_skipped = 0;  // tasks not started because they would end after the deadline
 };
 
 // Counts of the sweep's tasks before this run, for the progress line.

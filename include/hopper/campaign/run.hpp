@@ -35,6 +35,15 @@ struct RunOptions {
     // Accept new points whose unvaried settings differ from stored points' (mixing.hpp); by
     // default such a sweep is refused.
     bool allow_mixed = false;  // --threads was on the command line: say so when MPI ignores it
+    // Checkpoints inside a realization (checkpoints.hpp): on by default; the running states are
+    // also saved every checkpoint_interval seconds of wall time (0: only when stopped).
+    bool checkpoints = true;
+    double checkpoint_interval = 600.0;
+    // --dry-run: list what would run and its estimated core-hours; touch nothing.
+    bool dry_run = false;
+    // Called on the master only: the deadline (s since 1970) by which the run must end, or
+    // none (MasterOptions::deadline); it may write notes to the stream. Unset: no deadline.
+    std::function<std::optional<double>(std::ostream& err)> deadline;
     std::string code_version = "unknown";
     std::string command_line;
     // One realization (default: engine::run_realization(scene, task.seed, hooks)). Benchmarks
@@ -52,6 +61,13 @@ struct RunOptions {
 // Throws core::ConfigError (bad sweep file, physics differing from the store's) and
 // core::StoreError (store cannot be used); under MPI only rank 0 throws, other ranks return.
 int run_campaign(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// `campaign run --dry-run`: the realizations the sweep would run on its store (none is
+// started, the store is not opened for writing) and their estimated cost per point and in all,
+// from the cost model (expected_cost) at the worker seconds per particle-step measured on the
+// store's stored realizations, or at 50 ns per particle-step when nothing is measured yet.
+// Throws like run_campaign when the sweep cannot run on the store. Returns 0.
+int dry_run(const RunOptions& options, std::ostream& out, std::ostream& err);
 
 // The compiler that built this code ("gcc 12.2.0"), for provenance.
 std::string compiler_id();

@@ -26,6 +26,15 @@ class Rng {
     double uniform();
     // Uniform in [lo, hi).
     double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+    // The whole state (4 words), for checkpoints: set_state(state()) continues the sequence.
+    void state(std::uint64_t out[4]) const {
+        for (int k = 0; k < 4; ++k)
+            out[k] = s_[k];
+    }
+    void set_state(const std::uint64_t in[4]) {
+        for (int k = 0; k < 4; ++k)
+            s_[k] = in[k];
+    }
 
   private:
     std::uint64_t s_[4];

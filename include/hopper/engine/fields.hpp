@@ -110,6 +110,7 @@ class FieldAccumulator {
     FieldMoments& moments() { return out_; }
 
   private:
+    friend struct CheckpointAccess;  // checkpoint.cpp: the open window to bytes and back
     void add(int node, double w, const std::array<double, field_count>& f);
 
     FieldMoments out_;

@@ -8,6 +8,7 @@
 #include <memory>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include "hopper/engine/params.hpp"
 #include "hopper/engine/result.hpp"
@@ -51,6 +52,12 @@ struct RunHooks {
     const std::atomic<bool>* stop = nullptr;
     // The force pass (system.hpp). How to run, not what: every path gives the same bits.
     KernelPath kernel = KernelPath::automatic;
+    // Checkpoints (checkpoint.hpp): when *checkpoint_request is true at the start of a time step
+    // (every step is looked at; a relaxed atomic load), the realization clears it, saves its
+    // whole state and hands the bytes to on_checkpoint. The callback may throw to end the
+    // realization there (the worker does, to stop right after the checkpoint of a drain).
+    std::atomic<bool>* checkpoint_request = nullptr;
+    std::function<void(std::vector<std::uint8_t>&&)> on_checkpoint;
 };
 
 // One realization, phase by phase (for benchmarks and tests; run_realization() composes them).
@@ -76,6 +83,13 @@ class Realization {
     System& system();
     Phase phase() const;
 
+    // The whole state as bytes (checkpoint.hpp), taken between two time steps. restore_state
+    // replaces the state of a realization constructed with the same parameters and seed; it
+    // throws core::ConfigError when the bytes belong to another realization, another engine
+    // format or are damaged (the realization is then unchanged only in the first two cases).
+    std::vector<std::uint8_t> save_state() const;
+    void restore_state(std::span<const std::uint8_t> bytes);
+
   private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
@@ -85,5 +99,11 @@ class Realization {
 // message naming the cause and the remedy. Throws core::ConfigError for invalid parameters.
 RealizationResult run_realization(const SceneParams& params, std::uint64_t seed,
                                   const RunHooks& hooks = {});
+// The same realization continued from a state saved by save_state (a checkpoint): the result is
+// bit-identical to that of run_realization. Throws core::ConfigError when the state does not
+// belong to this realization (restore_state).
+RealizationResult resume_realization(const SceneParams& params, std::uint64_t seed,
+                                     std::span<const std::uint8_t> state,
+                                     const RunHooks& hooks = {});
 
 }  // namespace hopper::engine

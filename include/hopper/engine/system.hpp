@@ -158,6 +158,7 @@ class System {
   private:
     template <class Law, Scheme S>
     friend struct KernelImpl;
+    friend struct CheckpointAccess;  // checkpoint.cpp: the whole state to bytes and back
 
     detail::ForceArgs force_args();  // the columns and scratch of a force pass
     void ensure_ready();
@@ -173,6 +174,7 @@ class System {
     void remove_below_floor();
     void permute_by_cell(double cutoff);
     void build_pairs();
+    void pair_constants();  // pmbar_, wmbar_ from the list (after a rebuild or a restore)
     [[noreturn]] void fail_nonfinite() const;
     void check_overlap(double step_max_overlap);
 

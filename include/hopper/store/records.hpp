@@ -85,6 +85,11 @@ struct RunEndRecord {
     int stored = 0;        // realizations stored by this run
     double wall_seconds = 0.0;
     double master_cpu_seconds = 0.0;
+    // Worker seconds of realizations interrupted in this run that no checkpoint keeps (computed
+    // again later: thrown away), and those kept in checkpoint files (continued later). Records
+    // written before these existed read as 0.
+    double lost_worker_seconds = 0.0;
+    double saved_worker_seconds = 0.0;
 };
 
 // The size and CRC-32C of a closed HDF5 file: damage after the close (a disk error flipping

@@ -1,0 +1,134 @@
+#pragma once
+// The engine's state as bytes, for checkpoints inside a realization (issue 15). The engine only
+// turns its state into a byte buffer and back; where the bytes go (a file beside the store, a
+// message to the master) is the campaign layer's business.
+//
+// What a checkpoint holds: every column of the System (positions, velocities, forces, Gear
+// derivatives, the reference positions of the neighbour criterion), the neighbour list itself
+// with the tangential springs and their saved history grouped by owner, the cell grids, the wall
+// motion, the removal floor and pending removals, the counters; the realization's protocol state
+// (phase, detector clocks, shake state, the observers' schedules, the result so far) and the
+// field accumulator's open window. The random generator is used only to build the fill, which a
+// resumed realization rebuilds from its seed before the state is restored, so no generator state
+// is needed. Restoring all of it, and not recomputing any of it, is what makes a resumed
+// realization end bit-identical to one that never stopped (the neighbour list's order decides
+// the order in which forces are summed).
+//
+// Format: "HOPPERRS", a format version, then a fingerprint of the realization (seed, particle
+// count, integrator, dt, k_n, fields on/off), then the state. restore refuses (core::ConfigError
+// naming what differs) a buffer of another format version or of another realization; a
+// truncated or damaged buffer is refused the same way. The campaign layer adds its own header
+// (code version, physics) and a checksum around these bytes.
+
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace hopper::engine {
+
+inline constexpr std::uint32_t state_format_version = 1;
+
+// Little-endian byte buffer writer/reader for the state (fixed-width values, vectors as a
+// 64-bit count followed by the elements).
+class StateWriter {
+  public:
+    template <class T>
+    void put(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
+        bytes_.insert(bytes_.end(), p, p + sizeof(T));
+    }
+    template <class T>
+    void put_vector(const std::vector<T>& v) {
+        put<std::uint64_t>(v.size());
+        if constexpr (std::is_same_v<T, bool>) {
+            for (bool b : v)
+                put<std::uint8_t>(b ? 1 : 0);
+        } else {
+            const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
+            bytes_.insert(bytes_.end(), p, p + v.size() * sizeof(T));
+        }
+    }
+    void put_string(std::string_view s) {
+        put<std::uint64_t>(s.size());
+        bytes_.insert(bytes_.end(), s.begin(), s.end());
+    }
+    std::vector<std::uint8_t> take() { return std::move(bytes_); }
+
+  private:
+    std::vector<std::uint8_t> bytes_;
+};
+
+class StateReader {
+  public:
+    explicit StateReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+    template <class T>
+    T get() {
+        static_assert(std::is_trivially_copyable_v<T>);
+        need(sizeof(T));
+        T v;
+        std::memcpy(&v, bytes_.data() + pos_, sizeof(T));
+        pos_ += sizeof(T);
+        return v;
+    }
+    template <class T>
+    void get_vector(std::vector<T>& v) {
+        const auto n = get<std::uint64_t>();
+        if constexpr (std::is_same_v<T, bool>) {
+            need(n);
+            v.resize(n);
+            for (std::uint64_t k = 0; k < n; ++k)
+                v[k] = bytes_[pos_ + k] != 0;
+            pos_ += n;
+        } else {
+            if (n > (bytes_.size() - pos_) / sizeof(T)) fail();
+            v.resize(n);
+            if (n) std::memcpy(v.data(), bytes_.data() + pos_, n * sizeof(T));
+            pos_ += n * sizeof(T);
+        }
+    }
+    std::string get_string() {
+        const auto n = get<std::uint64_t>();
+        need(n);
+        std::string s(reinterpret_cast<const char*>(bytes_.data() + pos_), n);
+        pos_ += n;
+        return s;
+    }
+    bool at_end() const { return pos_ == bytes_.size(); }
+    [[noreturn]] static void fail();
+
+  private:
+    void need(std::uint64_t n) const {
+        if (n > bytes_.size() - pos_) fail();
+    }
+    std::span<const std::uint8_t> bytes_;
+    std::size_t pos_ = 0;
+};
+
+class System;
+class FieldAccumulator;
+struct FieldMoments;
+struct RealizationResult;
+
+// Friend of System and FieldAccumulator: the only code that reads or writes their private state
+// for checkpoints (src/engine/checkpoint.cpp).
+struct CheckpointAccess {
+    static void save(const System& s, StateWriter& w);
+    // `s` must have been built with the same SystemConfig (the realization rebuilds it from its
+    // parameters); its whole state is replaced.
+    static void restore(System& s, StateReader& r);
+    static void save(const FieldAccumulator& a, StateWriter& w);
+    static void restore(FieldAccumulator& a, StateReader& r);
+};
+
+void save_moments(const FieldMoments& m, StateWriter& w);
+void restore_moments(FieldMoments& m, StateReader& r);
+void save_result(const RealizationResult& res, StateWriter& w);
+void restore_result(RealizationResult& res, StateReader& r);
+
+}  // namespace hopper::engine

@@ -1,0 +1,336 @@
+#include "hopper/engine/checkpoint.hpp"
+
+#include "hopper/core/error.hpp"
+#include "hopper/engine/fields.hpp"
+#include "hopper/engine/result.hpp"
+#include "hopper/engine/system.hpp"
+
+namespace hopper::engine {
+
+void StateReader::fail() {
+    throw core::ConfigError(
+        "the checkpoint is truncated or damaged (its state ends early or holds impossible sizes)");
+}
+
+namespace {
+
+void put_vec2(StateWriter& w, const Vec2& v) {
+    w.put(v.x());
+    w.put(v.y());
+}
+
+Vec2 get_vec2(StateReader& r) {
+    const double x = r.get<double>();
+    const double y = r.get<double>();
+    return {x, y};
+}
+
+}  // namespace
+
+void CheckpointAccess::save(const System& s, StateWriter& w) {
+    w.put(s.time_);
+    w.put<std::uint8_t>(s.ready_);
+    w.put<std::uint8_t>(s.need_rebuild_);
+    w.put<std::uint8_t>(s.walls_changed_);
+    w.put<std::uint8_t>(s.history_saved_);
+    w.put<std::uint8_t>(s.history_);
+    w.put(s.next_id_);
+    for (const auto* c :
+         {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,    &s.fy_,     &s.tq_,
+          &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,    &s.x4_,     &s.y2_,
+          &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,   &s.wx_,
+          &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.hist_x_, &s.hist_y_})
+        w.put_vector(*c);
+    for (const auto* c :
+         {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_, &s.cell_of_,
+          &s.order_, &s.wcell_start_, &s.wcell_items_, &s.hist_start_, &s.hist_partner_})
+        w.put_vector(*c);
+    put_vec2(w, s.wall_offset_ref_);
+    put_vec2(w, s.wall_offset_);
+    put_vec2(w, s.wall_velocity_);
+    w.put(s.cell_size_);
+    w.put(s.grid_x0_);
+    w.put(s.grid_y0_);
+    w.put(s.grid_nx_);
+    w.put(s.grid_ny_);
+    w.put(s.wcell_size_);
+    w.put(s.wgrid_x0_);
+    w.put(s.wgrid_y0_);
+    w.put(s.wgrid_nx_);
+    w.put(s.wgrid_ny_);
+    w.put(s.r_max_);
+    w.put(s.wr_max_);
+    w.put(s.removal_floor_);
+    w.put<std::uint64_t>(s.removals_.size());
+    for (const Removal& q : s.removals_) {
+        w.put(q.id);
+        w.put(q.time);
+    }
+    put_vec2(w, s.wall_force_);
+    w.put(s.max_overlap_seen_);
+    w.put(s.contacts_);
+    w.put(s.rebuilds_);
+    w.put(s.phase_.forces);
+    w.put(s.phase_.integration);
+    w.put(s.phase_.neighbors);
+}
+
+void CheckpointAccess::restore(System& s, StateReader& r) {
+    s.time_ = r.get<double>();
+    s.ready_ = r.get<std::uint8_t>() != 0;
+    s.need_rebuild_ = r.get<std::uint8_t>() != 0;
+    s.walls_changed_ = r.get<std::uint8_t>() != 0;
+    s.history_saved_ = r.get<std::uint8_t>() != 0;
+    const bool history = r.get<std::uint8_t>() != 0;
+    if (history != s.history_)
+        throw core::ConfigError(
+            "the checkpoint was written with another contact law (tangential springs " +
+            std::string(history ? "on" : "off") + ", this realization has them " +
+            (s.history_ ? "on" : "off") + ")");
+    s.next_id_ = r.get<int>();
+    for (auto* c :
+         {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,    &s.fy_,     &s.tq_,
+          &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,    &s.x4_,     &s.y2_,
+          &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,   &s.wx_,
+          &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.hist_x_, &s.hist_y_})
+        r.get_vector(*c);
+    for (auto* c :
+         {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_, &s.cell_of_,
+          &s.order_, &s.wcell_start_, &s.wcell_items_, &s.hist_start_, &s.hist_partner_})
+        r.get_vector(*c);
+    s.wall_offset_ref_ = get_vec2(r);
+    s.wall_offset_ = get_vec2(r);
+    s.wall_velocity_ = get_vec2(r);
+    s.cell_size_ = r.get<double>();
+    s.grid_x0_ = r.get<double>();
+    s.grid_y0_ = r.get<double>();
+    s.grid_nx_ = r.get<int>();
+    s.grid_ny_ = r.get<int>();
+    s.wcell_size_ = r.get<double>();
+    s.wgrid_x0_ = r.get<double>();
+    s.wgrid_y0_ = r.get<double>();
+    s.wgrid_nx_ = r.get<int>();
+    s.wgrid_ny_ = r.get<int>();
+    s.r_max_ = r.get<double>();
+    s.wr_max_ = r.get<double>();
+    s.removal_floor_ = r.get<double>();
+    const auto n_removals = r.get<std::uint64_t>();
+    if (n_removals > s.x_.size() + (std::uint64_t(1) << 24)) StateReader::fail();
+    s.removals_.clear();
+    for (std::uint64_t k = 0; k < n_removals; ++k) {
+        const int id = r.get<int>();
+        const double t = r.get<double>();
+        s.removals_.push_back({id, t});
+    }
+    s.wall_force_ = get_vec2(r);
+    s.max_overlap_seen_ = r.get<double>();
+    s.contacts_ = r.get<int>();
+    s.rebuilds_ = r.get<std::int64_t>();
+    s.phase_.forces = r.get<double>();
+    s.phase_.integration = r.get<double>();
+    s.phase_.neighbors = r.get<double>();
+    // Columns of one particle kind must agree in length, and the lists must point inside them.
+    const std::size_t n = s.x_.size(), nw = s.wx_.size();
+    for (const auto* c :
+         {&s.y_, &s.vx_, &s.vy_, &s.w_, &s.fx_, &s.fy_, &s.tq_, &s.r_, &s.m_, &s.inv_m_, &s.inv_I_})
+        if (c->size() != n) StateReader::fail();
+    if (s.id_.size() != n || s.wy_.size() != nw || s.wr_.size() != nw || s.wid_.size() != nw)
+        StateReader::fail();
+    if (!s.pstart_.empty() &&
+        (s.pstart_.size() != n + 1 || std::size_t(s.pstart_.back()) != s.pj_.size()))
+        StateReader::fail();
+    if (!s.wstart_.empty() &&
+        (s.wstart_.size() != n + 1 || std::size_t(s.wstart_.back()) != s.wj_.size()))
+        StateReader::fail();
+    for (int j : s.pj_)
+        if (j < 0 || std::size_t(j) >= n) StateReader::fail();
+    for (int j : s.wj_)
+        if (j < 0 || std::size_t(j) >= nw) StateReader::fail();
+    // Per-pair constants of the list are derived, not saved: the same bits from the same list.
+    if (!s.pstart_.empty() && !s.wstart_.empty()) s.pair_constants();
+}
+
+void save_moments(const FieldMoments& m, StateWriter& w) {
+    w.put(m.grid.x0);
+    w.put(m.grid.y0);
+    w.put(m.grid.cell);
+    w.put(m.grid.nx);
+    w.put(m.grid.ny);
+    w.put<std::uint8_t>(m.grid.kernel == FieldKernel::gaussian);
+    w.put(m.grid.kernel_width);
+    w.put_vector(m.windows);
+    w.put_vector(m.weight);
+    for (int f = 0; f < field_count; ++f) {
+        w.put_vector(m.mean[f]);
+        w.put_vector(m.m2[f]);
+    }
+    w.put(m.total_windows);
+    w.put(m.samples);
+    w.put(m.t_first);
+    w.put(m.t_last);
+    w.put_vector(m.outline_x);
+    w.put_vector(m.outline_y);
+    w.put(m.wall_diameter);
+}
+
+void restore_moments(FieldMoments& m, StateReader& r) {
+    m.grid.x0 = r.get<double>();
+    m.grid.y0 = r.get<double>();
+    m.grid.cell = r.get<double>();
+    m.grid.nx = r.get<int>();
+    m.grid.ny = r.get<int>();
+    m.grid.kernel = r.get<std::uint8_t>() ? FieldKernel::gaussian : FieldKernel::cell;
+    m.grid.kernel_width = r.get<double>();
+    r.get_vector(m.windows);
+    r.get_vector(m.weight);
+    for (int f = 0; f < field_count; ++f) {
+        r.get_vector(m.mean[f]);
+        r.get_vector(m.m2[f]);
+    }
+    m.total_windows = r.get<std::int64_t>();
+    m.samples = r.get<std::int64_t>();
+    m.t_first = r.get<double>();
+    m.t_last = r.get<double>();
+    r.get_vector(m.outline_x);
+    r.get_vector(m.outline_y);
+    m.wall_diameter = r.get<double>();
+}
+
+void CheckpointAccess::save(const FieldAccumulator& a, StateWriter& w) {
+    save_moments(a.out_, w);
+    w.put(a.window_);
+    w.put(a.start_);
+    w.put(a.current_);
+    w.put(a.window_samples_);
+    w.put(a.min_weight_);
+    w.put_vector(a.wsum_);
+    for (int f = 0; f < field_count; ++f)
+        w.put_vector(a.fsum_[f]);
+    w.put_vector(a.touched_);
+}
+
+void CheckpointAccess::restore(FieldAccumulator& a, StateReader& r) {
+    restore_moments(a.out_, r);
+    a.window_ = r.get<double>();
+    a.start_ = r.get<double>();
+    a.current_ = r.get<std::int64_t>();
+    a.window_samples_ = r.get<int>();
+    a.min_weight_ = r.get<double>();
+    r.get_vector(a.wsum_);
+    for (int f = 0; f < field_count; ++f)
+        r.get_vector(a.fsum_[f]);
+    r.get_vector(a.touched_);
+    const auto nodes = std::size_t(a.out_.grid.size());
+    if (a.wsum_.size() != nodes) StateReader::fail();
+    for (int f = 0; f < field_count; ++f)
+        if (a.fsum_[f].size() != nodes) StateReader::fail();
+    for (int k : a.touched_)
+        if (k < 0 || std::size_t(k) >= nodes) StateReader::fail();
+}
+
+void save_result(const RealizationResult& res, StateWriter& w) {
+    w.put(static_cast<std::int32_t>(res.status));
+    w.put_string(res.message);
+    w.put(res.seed);
+    w.put(res.particles);
+    w.put(res.wall_particles);
+    w.put_vector(res.survival_times);
+    w.put_vector(res.censored);
+    w.put_vector(res.jam_onsets);
+    w.put_vector(res.shakes_per_jam);
+    w.put(res.n_jams);
+    w.put(res.n_shakes);
+    w.put(res.n_jams_multi_shake);
+    w.put<std::uint8_t>(res.empty_time.has_value());
+    w.put(res.empty_time.value_or(0.0));
+    w.put<std::uint8_t>(res.discharge_rate.has_value());
+    w.put(res.discharge_rate.value_or(0.0));
+    w.put(res.discharge_rate_mass);
+    w.put(res.discharged);
+    w.put_vector(res.exit_times);
+    w.put_vector(res.curve_time);
+    w.put_vector(res.curve_count);
+    w.put<std::uint64_t>(res.events.size());
+    for (const Event& e : res.events) {
+        w.put(static_cast<std::int32_t>(e.kind));
+        w.put(e.time);
+        w.put(e.sim_time);
+        w.put(e.in_hopper);
+    }
+    w.put(res.diagnostics);  // plain numbers
+    w.put<std::uint8_t>(res.fields.has_value());
+    if (res.fields) save_moments(*res.fields, w);
+    // Issue 13: avalanche sizes and arches so far.
+    w.put_vector(res.avalanche_sizes);
+    w.put<std::uint64_t>(res.arches.size());
+    for (const Arch& a : res.arches) {
+        w.put_vector(a.ids);
+        w.put_vector(a.x);
+        w.put_vector(a.y);
+        w.put(a.span);
+        w.put(a.max_angle);
+    }
+}
+
+void restore_result(RealizationResult& res, StateReader& r) {
+    const auto status = r.get<std::int32_t>();
+    if (status < 0 || status > static_cast<std::int32_t>(Status::failed)) StateReader::fail();
+    res.status = static_cast<Status>(status);
+    res.message = r.get_string();
+    res.seed = r.get<std::uint64_t>();
+    res.particles = r.get<int>();
+    res.wall_particles = r.get<int>();
+    r.get_vector(res.survival_times);
+    r.get_vector(res.censored);
+    r.get_vector(res.jam_onsets);
+    r.get_vector(res.shakes_per_jam);
+    res.n_jams = r.get<int>();
+    res.n_shakes = r.get<int>();
+    res.n_jams_multi_shake = r.get<int>();
+    const bool has_empty = r.get<std::uint8_t>() != 0;
+    const double empty = r.get<double>();
+    res.empty_time = has_empty ? std::optional<double>(empty) : std::nullopt;
+    const bool has_rate = r.get<std::uint8_t>() != 0;
+    const double rate = r.get<double>();
+    res.discharge_rate = has_rate ? std::optional<double>(rate) : std::nullopt;
+    res.discharge_rate_mass = r.get<double>();
+    res.discharged = r.get<int>();
+    r.get_vector(res.exit_times);
+    r.get_vector(res.curve_time);
+    r.get_vector(res.curve_count);
+    const auto n_events = r.get<std::uint64_t>();
+    if (n_events > (std::uint64_t(1) << 32)) StateReader::fail();
+    res.events.clear();
+    for (std::uint64_t k = 0; k < n_events; ++k) {
+        Event e{};
+        const auto kind = r.get<std::int32_t>();
+        if (kind < 0 || kind > static_cast<std::int32_t>(Event::Kind::stop)) StateReader::fail();
+        e.kind = static_cast<Event::Kind>(kind);
+        e.time = r.get<double>();
+        e.sim_time = r.get<double>();
+        e.in_hopper = r.get<int>();
+        res.events.push_back(e);
+    }
+    res.diagnostics = r.get<Diagnostics>();
+    if (r.get<std::uint8_t>()) {
+        FieldMoments m;
+        restore_moments(m, r);
+        res.fields = std::move(m);
+    } else {
+        res.fields.reset();
+    }
+    r.get_vector(res.avalanche_sizes);
+    const auto n_arches = r.get<std::uint64_t>();
+    if (n_arches > res.jam_onsets.size()) StateReader::fail();
+    res.arches.assign(n_arches, Arch{});
+    for (Arch& a : res.arches) {
+        r.get_vector(a.ids);
+        r.get_vector(a.x);
+        r.get_vector(a.y);
+        a.span = r.get<double>();
+        a.max_angle = r.get<double>();
+        if (a.x.size() != a.ids.size() || a.y.size() != a.ids.size()) StateReader::fail();
+    }
+}
+
+}  // namespace hopper::engine

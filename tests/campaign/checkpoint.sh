@@ -1,0 +1,190 @@
+#!/bin/bash
+# Checkpoints inside a realization, end to end (issue 15): real processes, real files.
+#  1. SIGTERM in the middle of realizations: each running one saves its state beside the store
+#     (STORE.checkpoints/), the run exits 4 and its /runs row says the worker time was kept
+#     (saved > 0, lost = 0); status lists the checkpoints.
+#  2. One of those files rewritten as if by another code version (valid checksum): the rerun
+#     refuses it with the reason and restarts that realization; the other continues from its
+#     state. Every realization ends identical to an uninterrupted run, and the files are gone.
+#  3. SIGKILL of the whole job (no chance to save at the stop) with --checkpoint-interval 0.3:
+#     the periodic states let the rerun continue; results identical again.
+#  4. A checkpoint of this sweep put beside a store of other physics under the same labels is
+#     refused ("other physics") and the realization restarts.
+#  5. --no-checkpoints: the same SIGTERM throws the running realizations' worker time away, and
+#     /runs says how much (lost > 0): the "before" of issue 15.
+#  6. --deadline: before anything is measured realizations start and are stopped, states saved,
+#     at the deadline minus the grace; once durations are measured, none starts that cannot end
+#     in time (the run ends at once, exit 4); bad values are refused with the allowed forms.
+# Usage: checkpoint.sh NP (0 = one process with 2 worker threads; else mpirun -np NP).
+NP=$1
+source "$(dirname "$0")/lib.sh"
+SWEEP=$DATA/ckpt.toml
+run_cmd() {  # run_cmd STORE [options...]: the command line for this NP
+    local store=$1
+    shift
+    if [ "$NP" -eq 0 ]; then
+        echo "$EXE" run "$SWEEP" --store "$store" --progress-interval 0 --threads 2 "$@"
+    else
+        echo mpirun -np "$NP" "$EXE" run "$SWEEP" --store "$store" --progress-interval 0 "$@"
+    fi
+}
+# wait_running STORE SECONDS: until a realization has been running for SECONDS (status --json).
+wait_running() {
+    local i
+    for i in $(seq 1 400); do
+        if "$EXE" status "$1" --json 2>/dev/null | "$PY" -c "
+import json, sys
+r = json.load(sys.stdin)['running']
+sys.exit(0 if r and max(t['seconds'] for t in r) >= $2 else 1)" 2>/dev/null; then
+            return 0
+        fi
+        sleep 0.05
+    done
+    fail "no realization of $1 ran for $2 s"
+}
+stop_all() {  # SIGTERM to every campaign process of the job (as Slurm at the limit)
+    if [ "$NP" -eq 0 ]; then kill -TERM "$JOB"; else kill -TERM $(pgrep -s "$JOB" -x campaign); fi
+    wait "$JOB"
+    JOB_RC=$?
+}
+
+run_expect 0 ref "$EXE" run "$SWEEP" --store "$WORK/ref.h5" --progress-interval 0
+digest "$WORK/ref.h5" ref.digest
+[ "$(wc -l <ref.digest)" -eq 4 ] || fail "reference has $(wc -l <ref.digest) realizations"
+
+# 1. SIGTERM mid-realization: states saved.
+STORE=$WORK/c.h5
+: >job.err
+start_job $(run_cmd "$STORE")
+wait_running "$STORE" 0.4
+stop_all
+[ "$JOB_RC" -eq 4 ] || { cat job.err >&2; fail "SIGTERM: exit $JOB_RC, expected 4"; }
+expect_in job.err "its state is saved and continues on resume"
+n=$(ls "$STORE.checkpoints"/*.ckpt 2>/dev/null | wc -l)
+[ "$n" -ge 1 ] || fail "no checkpoint file after SIGTERM"
+run_expect 0 st1 "$EXE" status "$STORE" --json
+"$PY" - st1.out "$n" <<'PY' || fail "status after SIGTERM"
+import json, sys
+s = json.load(open(sys.argv[1]))
+r = s["runs"][-1]
+assert r["end_reason"] == "interrupted by SIGTERM", r
+assert r["saved_worker_seconds"] > 0 and r["lost_worker_seconds"] == 0, r
+assert s["checkpoints"] == int(sys.argv[2]) and s["running"] == [], s
+PY
+"$PY" - "$STORE" <<'PY' || fail "runs table in the HDF5 file"
+import h5py, sys
+with h5py.File(sys.argv[1], "r") as f:
+    runs = f["runs"]
+    assert runs["saved_worker_seconds"][-1] > 0 and runs["lost_worker_seconds"][-1] == 0
+PY
+cp "$STORE.checkpoints"/*.ckpt "$WORK/" # kept for case 4
+
+# 2. One file as if from another code version (checksum recomputed): refused, restarted.
+victim=$(ls "$STORE.checkpoints"/*.ckpt | head -1)
+"$PY" - "$victim" <<'PY' || fail "rewriting the checkpoint"
+import struct, sys
+def crc32c(data):
+    table = []
+    for i in range(256):
+        c = i
+        for _ in range(8):
+            c = (c >> 1) ^ 0x82F63B78 if c & 1 else c >> 1
+        table.append(c)
+    c = 0xFFFFFFFF
+    for b in data:
+        c = table[(c ^ b) & 0xFF] ^ (c >> 8)
+    return c ^ 0xFFFFFFFF
+b = open(sys.argv[1], "rb").read()
+body = b[:-4]
+assert struct.unpack("<I", b[-4:])[0] == crc32c(body), "checksum layout"
+n = struct.unpack("<I", body[12:16])[0]  # the code version's length prefix
+new = b"v0.0-other"
+body = body[:12] + struct.pack("<I", len(new)) + new + body[16 + n:]
+open(sys.argv[1], "wb").write(body + struct.pack("<I", crc32c(body)))
+PY
+run_expect 0 rerun $(run_cmd "$STORE")
+expect_in rerun.err "written by code version v0.0-other"
+expect_in rerun.err "the realization restarts from its beginning"
+if [ "$n" -ge 2 ]; then expect_in rerun.err "realization(s) continued from a checkpoint"; fi
+[ ! -e "$STORE.checkpoints" ] || fail "checkpoints left after the campaign finished: $(ls "$STORE.checkpoints")"
+digest "$STORE" c.digest
+same_digests ref.digest c.digest
+
+# 3. SIGKILL with periodic checkpoints: the rerun continues from them.
+STORE=$WORK/k.h5
+: >job.err
+start_job $(run_cmd "$STORE" --checkpoint-interval 0.3)
+wait_running "$STORE" 1.0
+sleep 0.2
+n=$(ls "$STORE.checkpoints"/*.ckpt 2>/dev/null | wc -l)
+kill_job KILL
+[ "$n" -ge 1 ] || fail "no periodic checkpoint after 1 s with --checkpoint-interval 0.3"
+run_expect 0 krerun $(run_cmd "$STORE")
+expect_in krerun.err "realization(s) continued from a checkpoint"
+digest "$STORE" k.digest
+same_digests ref.digest k.digest
+
+# 4. Other physics under the same labels: refused, restarted.
+STORE=$WORK/p.h5
+mkdir -p "$STORE.checkpoints" && cp "$WORK"/*.ckpt "$STORE.checkpoints/"
+run_expect 0 phys "$EXE" run "$DATA/ckpt_physics.toml" --store "$STORE" --progress-interval 0 --threads 2
+expect_in phys.err "it was written for other physics of this point"
+[ ! -e "$STORE.checkpoints" ] || fail "refused checkpoints were not removed"
+
+# 5. Without checkpoints the interrupted worker time is thrown away, and /runs says so.
+STORE=$WORK/n.h5
+: >job.err
+start_job $(run_cmd "$STORE" --no-checkpoints)
+wait_running "$STORE" 0.4
+stop_all
+[ "$JOB_RC" -eq 4 ] || { cat job.err >&2; fail "SIGTERM without checkpoints: exit $JOB_RC"; }
+[ ! -e "$STORE.checkpoints" ] || fail "--no-checkpoints wrote checkpoints"
+run_expect 0 st5 "$EXE" status "$STORE" --json
+"$PY" -c "
+import json, sys
+r = json.load(open('st5.out'))['runs'][-1]
+assert r['lost_worker_seconds'] > 0.3 and r['saved_worker_seconds'] == 0, r" ||
+    fail "lost worker seconds without checkpoints"
+
+# 6. Deadlines. Nothing measured yet: realizations start and are stopped (states saved) at the
+#    deadline minus the grace; the rest of the campaign then ends identical. Measured (the
+#    reference store, extended by 2 realizations per point), without checkpoints: none is
+#    started that the measured durations say cannot end in time. (With checkpoints one that is
+#    longer than the whole allocation starts anyway: it can only finish in pieces.)
+STORE=$WORK/d.h5
+t0=$(date +%s.%N)
+run_expect 4 dl $(run_cmd "$STORE" --deadline +2.5 --grace 1)
+took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+# (mpirun's start and end add a second or two on a loaded machine: a bound against hanging)
+awk -v t="$took" 'BEGIN { exit !(t < 8) }' || fail "the deadline run took $took s (deadline 2.5 s)"
+expect_in dl.err "nothing of this campaign is measured yet"
+expect_in dl.err "stopped by the deadline"
+run_expect 0 dst "$EXE" status "$STORE" --json
+"$PY" -c "
+import json
+r = json.load(open('dst.out'))['runs'][-1]
+assert r['end_reason'] == 'interrupted by the deadline', r
+assert r['lost_worker_seconds'] == 0 and r['saved_worker_seconds'] > 0, r
+assert json.load(open('dst.out'))['done'] < 4" || fail "deadline run"
+run_expect 0 dfinish $(run_cmd "$STORE")
+digest "$STORE" d.digest
+same_digests ref.digest d.digest
+sed 's/^realizations = 2$/realizations = 4/' "$SWEEP" >more.toml
+run_expect 4 dm "$EXE" run more.toml --store "$WORK/ref.h5" --progress-interval 0 --deadline +1 \
+    --grace 0.5 --no-checkpoints
+expect_in dm.err "none of the 4 realization(s) left is expected to finish before it"
+expect_in dm.err "and checkpoints are off: it cannot finish in an allocation this long"
+run_expect 0 dmst "$EXE" status "$WORK/ref.h5" --json
+"$PY" -c "
+import json
+s = json.load(open('dmst.out'))
+assert s['done'] == 4 and s['pending'] == 4, s" || fail "a realization started after the measured deadline"
+for bad in tomorrow +5x @ 2026-13-01T00:00:00 slurm; do
+    run_expect 2 badd env -u SLURM_JOB_ID "$EXE" run "$SWEEP" --store "$WORK/x.h5" --deadline "$bad"
+    expect_in badd.err "--deadline '$bad'"
+done
+expect_in badd.err "not inside a Slurm job"
+run_expect 2 both "$EXE" run "$SWEEP" --store "$WORK/x.h5" --no-checkpoints --checkpoint-interval 5
+expect_in both.err "contradict"
+[ ! -e "$WORK/x.h5" ] || fail "a refused command line created a store"
+echo "checkpoint.sh: passed"
