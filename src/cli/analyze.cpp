@@ -1068,12 +1068,24 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
                             std::move(b.ds),
                             {}};
 
+    // The columns every fit across D shares (jam rate, avalanche size): the group and its
+    // angle first, the verdict last; `fits` is the group's member holding the fits.
+    const auto head = [&](Columns& c, auto fits) {
+        c.text("group", "theta and other varied settings",
+               per_group(a, [](auto& g) { return g.group; }));
+        c.real("theta_deg", "deg", "wall angle", per_group(a, [](auto& g) { return g.theta_deg; }));
+        c.integer("n_points", "outlets with jams",
+                  per_group(a, [&](auto& g) { return I((g.*fits).n_points); }));
+    };
+    const auto verdict = [&](Columns& c, auto fits) {
+        c.text("preferred", "exponential, power_law or undecided",
+               per_group(a, [&](auto& g) { return (g.*fits).preferred; }));
+        c.text("decision", "why", per_group(a, [&](auto& g) { return (g.*fits).decision; }));
+    };
+    using Group = std::decay_t<decltype(a.groups.front())>;
+
     Columns j;
-    j.text("group", "theta and other varied settings",
-           per_group(a, [](auto& g) { return g.group; }));
-    j.real("theta_deg", "deg", "wall angle", per_group(a, [](auto& g) { return g.theta_deg; }));
-    j.integer("n_points", "outlets with jams",
-              per_group(a, [](auto& g) { return I(g.jam_rate.n_points); }));
+    head(j, &Group::jam_rate);
     const auto ex = [&](auto get) {
         return per_group(a, [&](auto& g) {
             return when(g.jam_rate.exponential.valid, get(g.jam_rate.exponential));
@@ -1092,19 +1104,13 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
     j.optional("pow_gamma", "1", "power law: gamma", pw([](auto& f) { return f.gamma; }));
     j.optional("pow_Dc", "m", "power law: critical outlet Dc", pw([](auto& f) { return f.Dc; }));
     j.optional("pow_aic", "1", "power law: AIC", pw([](auto& f) { return f.aic; }));
-    j.text("preferred", "exponential, power_law or undecided",
-           per_group(a, [](auto& g) { return g.jam_rate.preferred; }));
-    j.text("decision", "why", per_group(a, [](auto& g) { return g.jam_rate.decision; }));
+    verdict(j, &Group::jam_rate);
     store::DerivedGroup jr{
         "jam_rate", {{"description", "jam rate 1/tau versus D per group"}}, std::move(j.ds), {}};
 
     // <s>(D) per group: the fit of p = 1/<s>, written as <s> (ln_s0 = -ln A).
     Columns v;
-    v.text("group", "theta and other varied settings",
-           per_group(a, [](auto& g) { return g.group; }));
-    v.real("theta_deg", "deg", "wall angle", per_group(a, [](auto& g) { return g.theta_deg; }));
-    v.integer("n_points", "outlets with jams",
-              per_group(a, [](auto& g) { return I(g.avalanche.n_points); }));
+    head(v, &Group::avalanche);
     const auto vex = [&](auto get) {
         return per_group(a, [&](auto& g) {
             return when(g.avalanche.exponential.valid, get(g.avalanche.exponential));
@@ -1129,9 +1135,7 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
     v.optional("pow_Dc", "m", "power law: critical outlet Dc", vpw([](auto& f) { return f.Dc; }));
     v.optional("pow_Dc_err", "m", "power law: s.e. of Dc", vpw([](auto& f) { return f.Dc_err; }));
     v.optional("pow_aic", "1", "power law: AIC", vpw([](auto& f) { return f.aic; }));
-    v.text("preferred", "exponential, power_law or undecided",
-           per_group(a, [](auto& g) { return g.avalanche.preferred; }));
-    v.text("decision", "why", per_group(a, [](auto& g) { return g.avalanche.decision; }));
+    verdict(v, &Group::avalanche);
     store::DerivedGroup av{"avalanche",
                            {{"description", "mean avalanche size <s> versus D per group"}},
                            std::move(v.ds),
