@@ -74,11 +74,52 @@ def worst(r, keys):
     return max(errs)
 
 
+def before_after(old_csv, new_csv, out):
+    """Worst deterministic error (all e_n) against cost relative to verlet delta = 200 of the
+    same run (runs on a shared machine differ in absolute cost): before and after the contact
+    corrections (issue 12)."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.8))
+    for path, tag, style in ((old_csv, "without corrections", "-"),
+                             (new_csv, "with contact corrections", "--")):
+        rows = load([path])
+        base = next((r.get("cost_hopper") for r in rows
+                     if r["scheme"] == "verlet" and r["delta"] == 200.0), None)
+        if not base:
+            continue
+        for scheme, (mk, col) in SCHEMES.items():
+            sr = [r for r in rows if r["scheme"] == scheme and r.get("cost_hopper")
+                  and worst(r, DET_ALL) is not None]
+            if not sr:
+                continue
+            ax.plot([r["cost_hopper"] / base for r in sr],
+                    [100 * max(worst(r, DET_ALL), FLOOR) for r in sr], marker=mk, color=col, ls=style,
+                    mfc="none" if style == "--" else col, label=f"{scheme}, {tag}")
+            for r in sr:
+                ax.annotate(f"{r['delta']:g}", (r["cost_hopper"] / base, 100 * worst(r, DET_ALL)),
+                            fontsize=7, xytext=(4, 3), textcoords="offset points")
+    ax.axhline(1.0, color="grey", lw=0.8, ls=":")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("cost per simulated second / verlet delta = 200 (same run)")
+    ax.set_ylabel("worst deterministic error, all e_n (%)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=150)
+    print(f"wrote {out}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("csv", nargs="+")
     ap.add_argument("-o", "--out", default="accuracy_pareto.png")
+    ap.add_argument("--before-after", action="store_true",
+                    help="two CSVs: without and with the contact corrections; draws the worst "
+                         "error against the cost relative to verlet delta = 200 of each run")
     a = ap.parse_args()
+    if a.before_after:
+        if len(a.csv) != 2:
+            ap.error("--before-after takes two CSV files: without and with the corrections")
+        return before_after(a.csv[0], a.csv[1], a.out)
     rows = [r for r in load(a.csv) if r.get("cost_hopper")]
 
     fig = plt.figure(figsize=(16, 7.4))
