@@ -8,6 +8,7 @@
 #include <map>
 
 #include "cli/json_writer.hpp"
+#include "hopper/campaign/adaptive.hpp"
 #include "hopper/campaign/checkpoints.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
@@ -299,18 +300,55 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
     }
 }
 
+// A campaign with a target (adaptive.hpp) plans max_realizations per point but runs only what
+// its rounds decide: pending is what the current round still lacks (0 once the target is met),
+// replayed from the stored results as `campaign run` does. Without this, the batch script would
+// resubmit a finished target campaign up to its cap. Returns the description of the rounds
+// (empty without a target).
+std::string apply_target(store::StoreStatus& s) {
+    if (s.runs.empty()) return {};
+    config::SweepFile sweep;
+    try {
+        sweep = config::parse_sweep(s.runs.back().info.sweep_text, s.runs.back().info.sweep_path);
+    } catch (const std::exception&) {
+        return {};  // a sweep text this version no longer reads: the plan's counts stand
+    }
+    const auto& spec = sweep.campaign;
+    if (!spec.target) return {};
+    std::map<std::string, campaign::PointResults> stored;
+    for (auto& r : store::read_journal_realizations(s.store))
+        stored[r.label][r.record.realization] = std::move(r.result);
+    std::vector<double> cost;
+    for (const auto& p : spec.points)
+        cost.push_back(campaign::expected_cost(p.scene));
+    const campaign::RoundState rs = campaign::replay_rounds(spec, stored, cost);
+    std::map<std::string, int> missing;
+    for (const auto& [p, i] : rs.missing)
+        ++missing[spec.points[std::size_t(p)].label];
+    s.pending = 0;
+    for (auto& p : s.points) {
+        p.pending = rs.finished ? 0 : missing[p.label];
+        s.pending += p.pending;
+    }
+    return (rs.finished ? "target met: no point needs more after round " : "target: round ") +
+           std::to_string(rs.round + 1) + "\n" +
+           campaign::describe_rounds(rs, spec.target->quantity);
+}
+
 int status_command(const std::vector<std::string>& args) {
     const po::variables_map vm = parse_command(args, status_options(), "store");
     if (vm.count("help")) {
         print_status_help(std::cout);
         return 0;
     }
-    const store::StoreStatus s =
-        store::read_status(single_positional(vm, "store", "store", "STORE.h5"));
-    if (vm["json"].as<bool>())
+    store::StoreStatus s = store::read_status(single_positional(vm, "store", "store", "STORE.h5"));
+    const std::string rounds = apply_target(s);
+    if (vm["json"].as<bool>()) {
         std::cout << status_json(s) << '\n';
-    else
+    } else {
         write_status(std::cout, s);
+        std::cout << rounds;
+    }
     return 0;
 }
 

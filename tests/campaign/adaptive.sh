@@ -12,6 +12,12 @@ digest "$WORK/one.h5" one.digest
 n=$(wc -l <one.digest)
 [ "$n" -gt 6 ] && [ "$n" -le 12 ] || fail "$n realizations: the rounds should stop between 7 and 12"
 expect_in one.err "max_realizations = 4 reached"
+# status counts what the rounds still need, not max_realizations per point: a finished target
+# campaign has nothing pending (the batch script resubmits while something is).
+run_expect 0 status "$EXE" status "$WORK/one.h5" --json
+grep -q '"pending": 0' status.out || fail "status of a finished target campaign shows pending realizations: $(grep -o '"pending": [0-9]*' status.out | head -1)"
+run_expect 0 status_text "$EXE" status "$WORK/one.h5"
+expect_in status_text.out "target met: no point needs more after round"
 
 if [ "${1:-}" = mpi ]; then
     run_expect 0 mpi mpirun -np 3 "$EXE" run "$SWEEP" --store "$WORK/mpi.h5" --progress-interval 0
