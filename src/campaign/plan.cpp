@@ -116,7 +116,8 @@ std::string scene_text(const engine::SceneParams& p) {
         l.add("material.normal_damping", engine::to_string(m.normal_damping));
     if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
     // Issue 12: listed only when on (stores written before it have it off).
-    if (p.integrator.contact_corrections) l.add("integrator.contact_corrections", std::string("true"));
+    if (p.integrator.contact_corrections)
+        l.add("integrator.contact_corrections", std::string("true"));
     // Steady state (issue 13): listed only when not the published protocol.
     if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
     if (q.jams_per_realization != d.protocol.jams_per_realization)

@@ -72,10 +72,9 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));
     // The modelling choices of issue 11: absent from the text at their defaults (so stores
     // written before them resume), present when set.
-    for (const char* name :
-         {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over", "slip_rule",
-          "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization",
-          "contact_corrections"})
+    for (const char* name : {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over",
+                             "slip_rule", "lever_arm", "normal_damping", "fill_base",
+                             "protocol.mode", "jams_per_realization", "contact_corrections"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
     EXPECT_TRUE(
         changed([](auto& q) { q.hopper.outlet_measure = engine::OutletMeasure::inner_envelope; }));

@@ -153,7 +153,8 @@ TEST(SweepParse, ModellingChoiceKeysLandInTheScene) {
     EXPECT_EQ(d.material.normal_damping, e::NormalDamping::nominal);
     EXPECT_EQ(d.protocol.fill_base, 0.0);
     EXPECT_FALSE(d.integrator.contact_corrections);
-    EXPECT_TRUE(parse("[integrator]\ncontact_corrections = true\n").base.integrator.contact_corrections);
+    EXPECT_TRUE(
+        parse("[integrator]\ncontact_corrections = true\n").base.integrator.contact_corrections);
     EXPECT_THAT(error_of("[integrator]\ncontact_corrections = 1\n"),
                 HasSubstr("integrator.contact_corrections"));
     const SweepFile s = parse(
