@@ -1162,6 +1162,21 @@ std::string p_text(double p) {
 
 namespace {
 
+// One group's fits across D (jam rate or avalanche size), as one line of the text output.
+void write_fits_line(std::ostream& out, const std::string& group, const stats::JamRateFits& j,
+                     std::size_t left_out, const char* left_out_text) {
+    out << "  " << group << ": " << j.n_points << " outlet(s) with jams";
+    if (left_out > 0) out << ", " << left_out << left_out_text;
+    out << "; exponential: "
+        << (j.exponential.valid ? "B = " + fmt("%.4g", j.exponential.B) + " 1/m"
+                                : j.exponential.reason)
+        << "; power law: "
+        << (j.power_law.valid ? "gamma = " + fmt("%.3g", j.power_law.gamma) +
+                                    ", Dc = " + fmt("%.4g", j.power_law.Dc) + " m"
+                              : j.power_law.reason)
+        << "; preferred: " << j.preferred << " (" << j.decision << ")\n";
+}
+
 void write_avalanche_text(std::ostream& out, const Analysis& a, std::size_t width) {
     char buf[1024];
     out << "avalanches per point (s: grains that crossed the outlet per survival interval; <s>: "
@@ -1191,20 +1206,8 @@ void write_avalanche_text(std::ostream& out, const Analysis& a, std::size_t widt
     }
     out << "mean avalanche size <s> versus D (exponential growth vs power-law divergence "
            "<s> = A (Dc - D)^-gamma)\n";
-    for (const auto& g : a.groups) {
-        const auto& j = g.avalanche;
-        out << "  " << g.group << ": " << j.n_points << " outlet(s) with jams";
-        if (!g.avalanche_left_out.empty())
-            out << ", " << g.avalanche_left_out.size() << " left out";
-        out << "; exponential: "
-            << (j.exponential.valid ? "B = " + fmt("%.4g", j.exponential.B) + " 1/m"
-                                    : j.exponential.reason)
-            << "; power law: "
-            << (j.power_law.valid ? "gamma = " + fmt("%.3g", j.power_law.gamma) +
-                                        ", Dc = " + fmt("%.4g", j.power_law.Dc) + " m"
-                                  : j.power_law.reason)
-            << "; preferred: " << j.preferred << " (" << j.decision << ")\n";
-    }
+    for (const auto& g : a.groups)
+        write_fits_line(out, g.group, g.avalanche, g.avalanche_left_out.size(), " left out");
 }
 
 }  // namespace
@@ -1259,20 +1262,9 @@ void write_analysis(std::ostream& out, const Analysis& a) {
             out << "no fit: " << b.reason << '\n';
     }
     out << "jam rate 1/tau versus D\n";
-    for (const auto& g : a.groups) {
-        const auto& j = g.jam_rate;
-        out << "  " << g.group << ": " << j.n_points << " outlet(s) with jams";
-        if (!g.jam_rate_left_out.empty())
-            out << ", " << g.jam_rate_left_out.size() << " left out (no jams)";
-        out << "; exponential: "
-            << (j.exponential.valid ? "B = " + fmt("%.4g", j.exponential.B) + " 1/m"
-                                    : j.exponential.reason)
-            << "; power law: "
-            << (j.power_law.valid ? "gamma = " + fmt("%.3g", j.power_law.gamma) +
-                                        ", Dc = " + fmt("%.4g", j.power_law.Dc) + " m"
-                                  : j.power_law.reason)
-            << "; preferred: " << j.preferred << " (" << j.decision << ")\n";
-    }
+    for (const auto& g : a.groups)
+        write_fits_line(out, g.group, g.jam_rate, g.jam_rate_left_out.size(),
+                        " left out (no jams)");
     write_avalanche_text(out, a, width);
     if (std::none_of(a.points.begin(), a.points.end(),
                      [](const PointAnalysis& p) { return p.fields.enabled; }))
