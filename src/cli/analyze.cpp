@@ -714,43 +714,10 @@ std::string analysis_json(const Analysis& a, const std::string& store, const std
 
     w.key("jam_rate_fits").begin_array();
     for (const auto& g : a.groups) {
-        const auto& j = g.jam_rate;
         w.begin_object();
         w.field("theta_deg", g.theta_deg);
         w.field("group", g.group);
-        w.field("n_points", j.n_points);
-        w.key("left_out").begin_array_inline();
-        for (const auto& [D, why] : g.jam_rate_left_out) {
-            w.begin_object_inline().field("D_cm", D).field("reason", why).end_object();
-        }
-        w.end_array();
-        const auto& x = j.exponential;
-        w.key("exponential").begin_object_inline();
-        w.field("valid", x.valid);
-        if (x.valid) {
-            w.field("ln_A", x.ln_A).field("ln_A_err", x.ln_A_err);
-            w.field("B_per_m", x.B).field("B_err_per_m", x.B_err);
-            w.field("chi2", x.chi2).field("dof", x.dof).field("aic", x.aic);
-        } else {
-            w.field("reason", x.reason);
-        }
-        w.end_object();
-        const auto& pl = j.power_law;
-        w.key("power_law").begin_object_inline();
-        w.field("valid", pl.valid);
-        if (pl.valid) {
-            w.field("ln_A", pl.ln_A).field("ln_A_err", pl.ln_A_err);
-            w.field("gamma", pl.gamma).field("gamma_err", pl.gamma_err);
-            w.field("Dc_m", pl.Dc).field("Dc_err_m", pl.Dc_err);
-            w.field("chi2", pl.chi2).field("dof", pl.dof).field("aic", pl.aic);
-        } else {
-            w.field("reason", pl.reason);
-        }
-        w.end_object();
-        w.field("preferred", j.preferred);
-        opt_field(w, "delta_aic",
-                  j.has_delta_aic ? std::optional<double>(j.delta_aic) : std::nullopt, j.decision);
-        w.field("decision", j.decision);
+        write_rate_fits(w, g.jam_rate, g.jam_rate_left_out, false);
         w.end_object();
     }
     w.end_array();
