@@ -313,9 +313,11 @@ struct KernelImpl final : System::Kernel {
             q.vix = a.vx[i];
             q.viy = a.vy[i];
             q.wi = rot ? a.w[i] : 0.0;
-            q.six = a.svx[i];
-            q.siy = a.svy[i];
-            q.swi = rot ? a.sw[i] : 0.0;
+            if constexpr (Corr) {  // the springs' own velocities: only with the corrections
+                q.six = a.svx[i];
+                q.siy = a.svy[i];
+                q.swi = rot ? a.sw[i] : 0.0;
+            }
             q.ri = ri;
             double fxi = 0.0, fyi = 0.0, tqi = 0.0;
             // Mobile partners: each pair once, Newton's third law.
@@ -336,9 +338,11 @@ struct KernelImpl final : System::Kernel {
                 q.vjx = a.vx[j];
                 q.vjy = a.vy[j];
                 q.wj = rot ? a.w[j] : 0.0;
-                q.sjx = a.svx[j];
-                q.sjy = a.svy[j];
-                q.swj = rot ? a.sw[j] : 0.0;
+                if constexpr (Corr) {
+                    q.sjx = a.svx[j];
+                    q.sjy = a.svy[j];
+                    q.swj = rot ? a.sw[j] : 0.0;
+                }
                 const PairOutput o =
                     detail::pair_force<Law, Corr, false>(a.pp, a.dt, a.lever_half, q, sx, sy);
                 fxi += o.fx;
