@@ -1,0 +1,43 @@
+#!/usr/bin/python3
+"""Digest of a store's physics content, for before/after comparisons of a code change that must
+not change results (issue 17). Hashes every dataset of the HDF5 view except provenance and
+timing (/runs, rank, attempt, task and wall seconds, timestamps), in storage order: run the
+campaign with one worker (`--threads 1`) so that the order is the same in both builds.
+
+    /usr/bin/python3 bench/redesign/digests.py STORE.h5   -> one line "sha256  STORE.h5"
+"""
+import hashlib
+import sys
+
+import h5py
+import numpy as np
+
+SKIP_GROUPS = ("/runs",)
+SKIP_NAMES = {"rank", "attempt", "task_seconds", "finished_unix", "time_unix", "wall_seconds",
+              "ns_per_particle_step", "seconds_forces", "seconds_integration",
+              "seconds_neighbors", "seconds_observers"}
+
+
+def digest(path):
+    h = hashlib.sha256()
+    names = []
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+        for n in sorted(names):
+            full = "/" + n
+            if full.startswith(SKIP_GROUPS) or n.rsplit("/", 1)[-1] in SKIP_NAMES:
+                continue
+            data = f[full][()]
+            h.update(full.encode())
+            if isinstance(data, np.ndarray) and data.dtype.kind == "O":
+                for x in data.ravel():
+                    h.update(x if isinstance(x, bytes) else str(x).encode())
+                    h.update(b"\0")
+            else:
+                h.update(np.asarray(data).tobytes())
+    return h.hexdigest()
+
+
+if __name__ == "__main__":
+    for p in sys.argv[1:]:
+        print(digest(p), p)
