@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "hopper/core/setting.hpp"
 #include "hopper/store/codec.hpp"
 
 namespace hopper::store {
@@ -24,6 +25,12 @@ struct PointPlan {
     double theta_deg = 0.0;
     int particles = 0;
     std::vector<std::uint64_t> seeds;  // realization r -> its seed; size = planned realizations
+    // Typed settings (core/setting.hpp). `settings`: what the label shows (the point's varied
+    // settings, canonical order); `parameters`: every scene parameter under its sweep-file name
+    // and unit. Empty when read from a journal written before they were recorded (the campaign
+    // layer recovers them from the run's recorded sweep text).
+    std::vector<core::Setting> settings;
+    std::vector<core::Setting> parameters;
     std::uint64_t physics_hash() const { return fnv1a64(scene); }
     int realizations() const { return static_cast<int>(seeds.size()); }
 };
