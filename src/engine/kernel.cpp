@@ -1,0 +1,350 @@
+// The System's kernel: integrators and the reference force loop (kernel.hpp).
+#include "kernel.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "force_batch.hpp"
+#include "pair_force.hpp"
+
+namespace hopper::engine {
+
+namespace {
+
+// Gear 5-value predictor-corrector for second-order equations (Allen & Tildesley, appendix E):
+// corrector coefficients for r, dt v, dt^2/2 a, dt^3/6 b, dt^4/24 c.
+constexpr double gear_c0 = 19.0 / 120.0;
+constexpr double gear_c1 = 3.0 / 4.0;
+constexpr double gear_c3 = 1.0 / 2.0;
+constexpr double gear_c4 = 1.0 / 12.0;
+
+
+// Gear predictor on one coordinate (Pascal triangle on the scaled derivatives
+// r_k = dt^k/k! d^k r/dt^k; velocity kept unscaled). Free functions over raw columns so that
+// the compiler sees no aliasing and vectorizes them.
+void gear_predict_axis(std::size_t n, double dt, double* __restrict x, double* __restrict v,
+                       double* __restrict x2, double* __restrict x3, const double* __restrict x4) {
+    const double inv_dt = 1.0 / dt;
+    for (std::size_t i = 0; i < n; ++i) {
+        x[i] += dt * v[i] + x2[i] + x3[i] + x4[i];
+        v[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
+        x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
+        x3[i] += 4.0 * x4[i];
+    }
+}
+
+// Gear corrector on one coordinate: e = dt^2/2 a(t+dt) - predicted r_2, with
+// a = force * inv_mass + g. x may be null (rotation: the angle itself is not tracked).
+void gear_correct_axis(std::size_t n, double dt, double g, const double* __restrict force,
+                       const double* __restrict inv_mass, double* __restrict x,
+                       double* __restrict v, double* __restrict x2, double* __restrict x3,
+                       double* __restrict x4) {
+    const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
+    if (x)
+        for (std::size_t i = 0; i < n; ++i)
+            x[i] += gear_c0 * (h * (force[i] * inv_mass[i] + g) - x2[i]);
+    for (std::size_t i = 0; i < n; ++i) {
+        const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
+        v[i] += gear_c1 * e * inv_dt;
+        x2[i] += e;
+        x3[i] += gear_c3 * e;
+        x4[i] += gear_c4 * e;
+    }
+}
+
+
+// Velocity Verlet on one coordinate: the half kick v += dt/2 (force inv_mass + g), then, when
+// x is given, the drift x += dt v (x is null for the closing half kick and for rotation).
+void verlet_axis(std::size_t n, double dt, double g, const double* __restrict force,
+                 const double* __restrict inv_mass, double* __restrict v, double* __restrict x) {
+    const double hdt = 0.5 * dt;
+    if (x) {
+        for (std::size_t i = 0; i < n; ++i) {
+            v[i] += hdt * (force[i] * inv_mass[i] + g);
+            x[i] += dt * v[i];
+        }
+    } else {
+        for (std::size_t i = 0; i < n; ++i)
+            v[i] += hdt * (force[i] * inv_mass[i] + g);
+    }
+}
+
+// Largest squared displacement since the last rebuild; NaN if any position is not finite.
+double max_displacement2(std::size_t n, const double* __restrict x, const double* __restrict y,
+                         const double* __restrict xr, const double* __restrict yr) {
+    double maxd2 = 0.0, sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double dx = x[i] - xr[i], dy = y[i] - yr[i];
+        const double d2 = dx * dx + dy * dy;
+        maxd2 = std::max(maxd2, d2);
+        sum += d2;  // NaN or inf anywhere makes the sum non-finite
+    }
+    return std::isfinite(sum) ? maxd2 : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Corrections, gear4: mean = 0.5 (v + saved), written over saved.
+void mean_into(std::size_t n, const double* __restrict v, double* __restrict saved) {
+    for (std::size_t i = 0; i < n; ++i)
+        saved[i] = 0.5 * (v[i] + saved[i]);
+}
+
+// Corrections, verlet: out = v + dt/2 (force inv_mass + g).
+void extrapolate(std::size_t n, double dt, double g, const double* __restrict force,
+                 const double* __restrict inv_mass, const double* __restrict v,
+                 double* __restrict out) {
+    const double hdt = 0.5 * dt;
+    for (std::size_t i = 0; i < n; ++i)
+        out[i] = v[i] + hdt * (force[i] * inv_mass[i] + g);
+}
+
+}  // namespace
+
+template <class Law, Scheme S>
+struct KernelImpl final : System::Kernel {
+    static constexpr bool rot = Law::has_tangential;
+    static constexpr bool hist = Law::has_history;
+
+    double predict(System& s) override {
+        const std::size_t n = s.x_.size();
+        const double dt = s.config_.dt;
+        const bool corr = s.config_.contact_corrections;
+        if constexpr (S == Scheme::gear4) {
+            // Corrections: the springs grow with the mean of the last corrected velocity
+            // (saved here) and the predicted one.
+            if (corr && hist) {
+                s.avx_ = s.vx_;
+                s.avy_ = s.vy_;
+                s.aw_ = s.w_;
+            }
+            gear_predict_axis(n, dt, s.x_.data(), s.vx_.data(), s.x2_.data(), s.x3_.data(),
+                              s.x4_.data());
+            gear_predict_axis(n, dt, s.y_.data(), s.vy_.data(), s.y2_.data(), s.y3_.data(),
+                              s.y4_.data());
+            if constexpr (rot) {
+                // The angle is not tracked: predict omega and its derivatives only.
+                double* __restrict w = s.w_.data();
+                double* __restrict w2 = s.w2_.data();
+                double* __restrict w3 = s.w3_.data();
+                const double* __restrict w4 = s.w4_.data();
+                const double inv_dt = 1.0 / dt;
+                for (std::size_t i = 0; i < n; ++i) {
+                    w[i] += (2.0 * w2[i] + 3.0 * w3[i] + 4.0 * w4[i]) * inv_dt;
+                    w2[i] += 3.0 * w3[i] + 6.0 * w4[i];
+                    w3[i] += 4.0 * w4[i];
+                }
+            }
+            if (corr && hist) {
+                mean_into(n, s.vx_.data(), s.avx_.data());
+                mean_into(n, s.vy_.data(), s.avy_.data());
+                mean_into(n, s.w_.data(), s.aw_.data());
+            }
+        } else {
+            // Velocity Verlet: half kick with the last forces, then drift.
+            const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.x_.data());
+            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data());
+            if constexpr (rot)
+                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr);
+            // Corrections: the dashpots see the velocity extrapolated to the end of the step
+            // with the last forces, v + dt/2 (F/m + g).
+            if (corr) {
+                s.avx_.resize(n);
+                s.avy_.resize(n);
+                s.aw_.resize(n);
+                extrapolate(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.avx_.data());
+                extrapolate(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.avy_.data());
+                if constexpr (rot)
+                    extrapolate(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(),
+                                s.aw_.data());
+            }
+        }
+        return max_displacement2(n, s.x_.data(), s.y_.data(), s.xref_.data(), s.yref_.data());
+    }
+
+    void correct(System& s) override {
+        const std::size_t n = s.x_.size();
+        const double dt = s.config_.dt;
+        const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+        if constexpr (S == Scheme::gear4) {
+            gear_correct_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.x_.data(), s.vx_.data(),
+                              s.x2_.data(), s.x3_.data(), s.x4_.data());
+            gear_correct_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.y_.data(), s.vy_.data(),
+                              s.y2_.data(), s.y3_.data(), s.y4_.data());
+            if constexpr (rot)
+                gear_correct_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), nullptr, s.w_.data(),
+                                  s.w2_.data(), s.w3_.data(), s.w4_.data());
+        } else {
+            // Velocity Verlet: the closing half kick with the new forces.
+            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), nullptr);
+            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), nullptr);
+            if constexpr (rot)
+                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr);
+        }
+    }
+
+    void prime(System& s) override {
+        if constexpr (S == Scheme::gear4) {
+            const std::size_t n = s.x_.size();
+            const double h = 0.5 * s.config_.dt * s.config_.dt;
+            const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+            for (auto* col :
+                 {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_, &s.w4_})
+                col->assign(n, 0.0);
+            for (std::size_t i = 0; i < n; ++i) {
+                s.x2_[i] = h * (s.fx_[i] * s.inv_m_[i] + gx);
+                s.y2_[i] = h * (s.fy_[i] * s.inv_m_[i] + gy);
+                if constexpr (rot) s.w2_[i] = h * s.tq_[i] * s.inv_I_[i];
+            }
+        }
+    }
+
+    // The velocity sets of the force pass: without corrections the particles' velocities for
+    // both; with them, verlet's dashpots use the extrapolated set and gear4's springs the mean.
+    void velocity_sets(System& s, detail::ForceArgs& a, bool& two) const {
+        const bool corr = s.config_.contact_corrections;
+        const bool verlet_corr = corr && S == Scheme::verlet;
+        a.vx = verlet_corr ? s.avx_.data() : s.vx_.data();
+        a.vy = verlet_corr ? s.avy_.data() : s.vy_.data();
+        a.w = verlet_corr ? s.aw_.data() : s.w_.data();
+        two = corr && hist;
+        const bool gear_corr = two && S == Scheme::gear4;
+        a.svx = two ? (gear_corr ? s.avx_.data() : s.vx_.data()) : a.vx;
+        a.svy = two ? (gear_corr ? s.avy_.data() : s.vy_.data()) : a.vy;
+        a.sw = two ? (gear_corr ? s.aw_.data() : s.w_.data()) : a.w;
+    }
+
+    double forces(System& s) override {
+        detail::ForceArgs a = s.force_args();
+        bool two = false;
+        velocity_sets(s, a, two);
+        detail::ForceSums sums;
+        if (s.kernel_path_ == KernelPath::reference) {
+            sums = two ? reference<true>(a) : reference<false>(a);
+        } else {
+            constexpr int law = !Law::has_tangential ? 0 : (!Law::has_history ? 1 : 2);
+            sums = detail::force_table(s.kernel_path_).fn[law][two ? 1 : 0](a);
+        }
+        s.wall_force_ = Vec2(sums.wall_fx, sums.wall_fy);
+        s.contacts_ = sums.contacts;
+        return sums.max_overlap;
+    }
+
+    // The reference force pass: one loop over the neighbour list, each touching pair evaluated
+    // where it is found. The batched paths must give exactly its bits (test_kernel_paths).
+    template <bool Corr>
+    static detail::ForceSums reference(const detail::ForceArgs& a) {
+        using detail::PairInput;
+        using detail::PairOutput;
+        std::fill(a.fx, a.fx + a.n, 0.0);
+        std::fill(a.fy, a.fy + a.n, 0.0);
+        if constexpr (rot) std::fill(a.tq, a.tq + a.n, 0.0);
+        double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
+        double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
+        int contacts = 0;
+        PairInput q{};
+        for (int i = 0; i < a.n; ++i) {
+            const double xi = a.x[i], yi = a.y[i], ri = a.r[i];
+            q.vix = a.vx[i];
+            q.viy = a.vy[i];
+            q.wi = rot ? a.w[i] : 0.0;
+            if constexpr (Corr) {  // the springs' own velocities: only with the corrections
+                q.six = a.svx[i];
+                q.siy = a.svy[i];
+                q.swi = rot ? a.sw[i] : 0.0;
+            }
+            q.ri = ri;
+            double fxi = 0.0, fyi = 0.0, tqi = 0.0;
+            // Mobile partners: each pair once, Newton's third law.
+            for (int k = a.ps[i]; k < a.ps[i + 1]; ++k) {
+                const int j = a.pj[k];
+                double& sx = hist ? a.hx[k] : no_spring_x;
+                double& sy = hist ? a.hy[k] : no_spring_y;
+                q.dx = xi - a.x[j];
+                q.dy = yi - a.y[j];
+                q.rj = a.r[j];
+                q.rs = ri + q.rj;
+                q.d2 = q.dx * q.dx + q.dy * q.dy;
+                if (q.d2 >= q.rs * q.rs) {
+                    sx = sy = 0.0;  // not touching: the spring is forgotten
+                    continue;
+                }
+                q.mbar = a.pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
+                q.vjx = a.vx[j];
+                q.vjy = a.vy[j];
+                q.wj = rot ? a.w[j] : 0.0;
+                if constexpr (Corr) {
+                    q.sjx = a.svx[j];
+                    q.sjy = a.svy[j];
+                    q.swj = rot ? a.sw[j] : 0.0;
+                }
+                const PairOutput o =
+                    detail::pair_force<Law, Corr, false>(a.pp, a.dt, a.lever_half, q, sx, sy);
+                fxi += o.fx;
+                fyi += o.fy;
+                a.fx[j] -= o.fx;
+                a.fy[j] -= o.fy;
+                if constexpr (rot) {
+                    tqi -= o.ti;      // -l_i (n x F_t)
+                    a.tq[j] -= o.tj;  // -l_j (n x F_t): the same form for the partner
+                }
+                max_ov = std::max(max_ov, o.overlap);
+                ++contacts;
+            }
+            // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0.
+            double wfxi = 0.0, wfyi = 0.0;
+            q.vjx = q.sjx = a.vwx;
+            q.vjy = q.sjy = a.vwy;
+            q.wj = q.swj = 0.0;
+            for (int k = a.ws[i]; k < a.ws[i + 1]; ++k) {
+                const int j = a.wj[k];
+                double& sx = hist ? a.gx[k] : no_spring_x;
+                double& sy = hist ? a.gy[k] : no_spring_y;
+                q.dx = xi - (a.wx[j] + a.ox);
+                q.dy = yi - (a.wy[j] + a.oy);
+                q.rj = a.wr[j];
+                q.rs = ri + q.rj;
+                q.d2 = q.dx * q.dx + q.dy * q.dy;
+                if (q.d2 >= q.rs * q.rs) {
+                    sx = sy = 0.0;
+                    continue;
+                }
+                q.mbar = a.wmbar[k];
+                const PairOutput o =
+                    detail::pair_force<Law, Corr, false>(a.pw, a.dt, a.lever_half, q, sx, sy);
+                wfxi += o.fx;
+                wfyi += o.fy;
+                if constexpr (rot) tqi -= o.ti;
+                max_ov = std::max(max_ov, o.overlap);
+                ++contacts;
+            }
+            a.fx[i] += fxi + wfxi;
+            a.fy[i] += fyi + wfyi;
+            wfx -= wfxi;
+            wfy -= wfyi;
+            if constexpr (rot) a.tq[i] += tqi;
+        }
+        return {max_ov, wfx, wfy, contacts};
+    }
+};
+
+namespace {
+
+template <class Law>
+std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme) {
+    if (scheme == Scheme::gear4) return std::make_unique<KernelImpl<Law, Scheme::gear4>>();
+    return std::make_unique<KernelImpl<Law, Scheme::verlet>>();
+}
+
+}  // namespace
+
+std::unique_ptr<System::Kernel> detail::make_kernel(LawKind law, Scheme scheme) {
+    switch (law) {
+        case LawKind::frictionless: return make_kernel_for<FrictionlessLaw>(scheme);
+        case LawKind::viscous: return make_kernel_for<ViscousFrictionLaw>(scheme);
+        case LawKind::spring: break;
+    }
+    return make_kernel_for<SpringFrictionLaw>(scheme);
+}
+
+}  // namespace hopper::engine

@@ -1,0 +1,33 @@
+#pragma once
+// The System's kernel (private to the engine): one contact law and one integrator chosen at
+// setup, so that the hot loops contain no configuration branches and no per-contact virtual
+// calls (one virtual call per phase). kernel.cpp holds the integrators (Gear predictor-corrector,
+// velocity Verlet, the contact corrections' second velocity set) and the reference force loop.
+
+#include <memory>
+
+#include "hopper/engine/system.hpp"
+
+namespace hopper::engine {
+
+struct System::Kernel {
+    virtual ~Kernel() = default;
+    // Advances positions; returns the largest squared displacement since the last rebuild
+    // (NaN when the state is not finite). Loops use __restrict pointers (the columns never
+    // alias) so that the compiler vectorizes them.
+    virtual double predict(System& s) = 0;
+    // Computes forces and torques; returns the largest overlap of this evaluation.
+    virtual double forces(System& s) = 0;
+    virtual void correct(System& s) = 0;
+    // Initialises the integrator's history from the current forces.
+    virtual void prime(System& s) = 0;
+};
+
+namespace detail {
+// Which contact law a scene needs: frictionless (no rotation integrated), viscous friction
+// (k_t = 0, no spring history) or the Cundall-Strack spring.
+enum class LawKind { frictionless, viscous, spring };
+std::unique_ptr<System::Kernel> make_kernel(LawKind law, Scheme scheme);
+}  // namespace detail
+
+}  // namespace hopper::engine

@@ -1,0 +1,140 @@
+// The realization's checkpoint: its whole state to bytes and back (checkpoint.hpp), field by
+// field; the order is the state format (state_format_version).
+#include "realization_impl.hpp"
+
+namespace hopper::engine {
+
+using Clock = std::chrono::steady_clock;
+using Flow = detail::JamDetector::Flow;
+
+// What a state must agree on with the realization it is restored into.
+void Realization::Impl::put_fingerprint(StateWriter& w) const {
+    w.put(res.seed);
+    w.put(p.particles.count);
+    w.put(static_cast<std::int32_t>(p.integrator.scheme));
+    w.put(c.dt);
+    w.put(c.k_n);
+    w.put<std::uint8_t>(p.fields.enabled);
+}
+
+void Realization::Impl::check_fingerprint(StateReader& r) const {
+    std::ostringstream why;
+    const auto seed = r.get<std::uint64_t>();
+    const auto count = r.get<int>();
+    const auto scheme = r.get<std::int32_t>();
+    const auto dt = r.get<double>();
+    const auto k_n = r.get<double>();
+    const bool fields_on = r.get<std::uint8_t>() != 0;
+    if (seed != res.seed) why << " seed " << seed << " (this realization: " << res.seed << ")";
+    if (count != p.particles.count)
+        why << " particles " << count << " (this realization: " << p.particles.count << ")";
+    if (scheme != static_cast<std::int32_t>(p.integrator.scheme)) why << " another integrator";
+    if (dt != c.dt) why << " dt " << dt << " s (this realization: " << c.dt << " s)";
+    if (k_n != c.k_n) why << " k_n " << k_n << " N/m (this realization: " << c.k_n << " N/m)";
+    if (fields_on != p.fields.enabled)
+        why << " fields " << (fields_on ? "on" : "off")
+            << " (this realization: " << (p.fields.enabled ? "on" : "off") << ")";
+    if (!why.str().empty())
+        throw core::ConfigError("the checkpoint belongs to another realization:" + why.str());
+}
+
+std::vector<std::uint8_t> Realization::Impl::save_state() const {
+    StateWriter w;
+    w.put_string("HOPPERRS");
+    w.put(state_format_version);
+    put_fingerprint(w);
+    w.put(static_cast<std::int32_t>(phase));
+    w.put(static_cast<std::int32_t>(det.flow));
+    w.put(std::chrono::duration<double>(Clock::now() - wall_start).count());
+    w.put(particle_steps);
+    w.put(td);
+    w.put(det.flow_start);
+    w.put(det.last_occupied);
+    w.put(det.check_start);
+    w.put(shaker.shake_start);
+    w.put(shaker.shakes_this_jam);
+    w.put<std::uint64_t>(det.jammed.size());
+    for (const auto& [on, off] : det.jammed) {
+        w.put(on);
+        w.put(off);
+    }
+    w.put_vector(log_.exit_mass);
+    w.put(step_count);
+    w.put(next_snapshot);
+    w.put(next_progress);
+    w.put(below_since);
+    // Issue 13: the avalanche count's base, the steady state's insertion height and its
+    // generator (draws positions of re-inserted particles).
+    w.put(interval_base);
+    w.put(reinserter.insert_base);
+    std::uint64_t rs[4];
+    rng.state(rs);
+    for (std::uint64_t v : rs)
+        w.put(v);
+    save_result(res, w);
+    CheckpointAccess::save(*sys, w);
+    w.put<std::uint8_t>(fields.active());
+    if (fields.active()) CheckpointAccess::save(*fields.acc, w);
+    return w.take();
+}
+
+void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
+    static const std::uint8_t magic[16] = {8,   0,   0,   0,   0,   0,   0,   0,
+                                           'H', 'O', 'P', 'P', 'E', 'R', 'R', 'S'};
+    if (bytes.size() < 16 || !std::equal(magic, magic + 16, bytes.begin()))
+        throw core::ConfigError("the checkpoint is not a hopper realization state");
+    StateReader r(bytes);
+    r.get_string();
+    const auto version = r.get<std::uint32_t>();
+    if (version != state_format_version)
+        throw core::ConfigError("the checkpoint has state format " + std::to_string(version) +
+                                "; this engine reads format " +
+                                std::to_string(state_format_version));
+    check_fingerprint(r);
+    const auto ph = r.get<std::int32_t>();
+    const auto fl = r.get<std::int32_t>();
+    if (ph < 0 || ph > 2 || fl < 0 || fl > 3) StateReader::fail();
+    phase = static_cast<Phase>(ph);
+    det.flow = static_cast<Flow>(fl);
+    const double elapsed = r.get<double>();
+    wall_start = Clock::now() - std::chrono::duration_cast<Clock::duration>(
+                                    std::chrono::duration<double>(elapsed));
+    particle_steps = r.get<double>();
+    td = r.get<double>();
+    det.flow_start = r.get<double>();
+    det.last_occupied = r.get<double>();
+    det.check_start = r.get<double>();
+    shaker.shake_start = r.get<double>();
+    shaker.shakes_this_jam = r.get<int>();
+    const auto n_jammed = r.get<std::uint64_t>();
+    if (n_jammed > (std::uint64_t(1) << 32)) StateReader::fail();
+    det.jammed.clear();
+    for (std::uint64_t k = 0; k < n_jammed; ++k) {
+        const double on = r.get<double>();
+        const double off = r.get<double>();
+        det.jammed.emplace_back(on, off);
+    }
+    r.get_vector(log_.exit_mass);
+    step_count = r.get<std::int64_t>();
+    next_snapshot = r.get<double>();
+    next_progress = r.get<double>();
+    below_since = r.get<double>();
+    interval_base = r.get<int>();
+    reinserter.insert_base = r.get<double>();
+    std::uint64_t rs[4];
+    for (std::uint64_t& v : rs)
+        v = r.get<std::uint64_t>();
+    rng.set_state(rs);
+    restore_result(res, r);
+    CheckpointAccess::restore(*sys, r);
+    fields.acc.reset();
+    if (r.get<std::uint8_t>()) {
+        if (!p.fields.enabled) StateReader::fail();
+        fields.start(p, c.dt, wall_top, outline);  // the grid and period; the state below
+        CheckpointAccess::restore(*fields.acc, r);
+    }
+    if (!r.at_end()) StateReader::fail();
+}
+
+
+}  // namespace hopper::engine
