@@ -3,8 +3,9 @@
 //
 //   bench_engine [--repeats R] [--steps K] [--particles N] [--full] [--skips] [--fields]
 //                [--csv FILE] [--scheme gear4|verlet] [--delta D] [--kernel PATH]
-//                [--paths] [--lammps RUN_SH [--core C]]
+//                [--corrections] [--paths] [--lammps RUN_SH [--core C]]
 //
+//   --corrections  integrator.contact_corrections on (docs/accuracy.md)
 //   --kernel  force path: auto (default), reference, baseline, avx2, avx512 (same bits)
 //   --paths   every force path this CPU has, compared on one trajectory (CPU time per step)
 //   --lammps  side by side with LAMMPS: ../shared/reference/lammps-hopper/run.sh and this
@@ -53,9 +54,10 @@ double peak_rss_mib() {
     return ru.ru_maxrss / 1024.0;  // Linux: kilobytes
 }
 
-// Set from the command line (--scheme, --delta, --kernel).
+// Set from the command line (--scheme, --delta, --corrections, --kernel).
 Scheme g_scheme = Scheme::gear4;
 double g_delta = 50.0;
+bool g_corrections = false;
 KernelPath g_kernel = KernelPath::automatic;
 
 SceneParams full_scene(int particles) {
@@ -66,6 +68,7 @@ SceneParams full_scene(int particles) {
     p.material.collision_time = 8.0e-4;
     p.integrator.steps_per_collision = g_delta;
     p.integrator.scheme = g_scheme;
+    p.integrator.contact_corrections = g_corrections;
     return p;
 }
 
@@ -352,11 +355,13 @@ int main(int argc, char** argv) {
             g_scheme = next() == "verlet" ? Scheme::verlet : Scheme::gear4;
         else if (arg == "--delta")
             g_delta = std::stod(next());
+        else if (arg == "--corrections")
+            g_corrections = true;
         else {
             std::fprintf(stderr,
                          "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
                          "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] "
-                         "[--kernel auto|reference|baseline|avx2|avx512] [--paths] "
+                         "[--corrections] [--kernel auto|reference|baseline|avx2|avx512] [--paths] "
                          "[--lammps RUN_SH [--core C]]\n");
             return 2;
         }
@@ -371,8 +376,9 @@ int main(int argc, char** argv) {
 
     std::printf(
         "hopper engine benchmark: %d particles, W = 43 cm, tau_c = 8e-4 s, delta = %g, "
-        "%s; medians of %d repeats\n",
-        particles, g_delta, to_string(g_scheme).c_str(), repeats);
+        "%s%s; medians of %d repeats\n",
+        particles, g_delta, to_string(g_scheme).c_str(),
+        g_corrections ? " with the contact corrections" : "", repeats);
     const double rss0 = peak_rss_mib();
     RunHooks hooks;
     hooks.kernel = g_kernel;
