@@ -41,10 +41,17 @@ if [ "$NP" -gt 0 ]; then
     for rank in $((NP - 1)) 0; do
         start_job "${CMD[@]}"
         random_sleep 600 1200
+        hit=0
         for p in $(pgrep -s "$JOB" -x campaign); do
-            grep -qz "^OMPI_COMM_WORLD_RANK=$rank\$" /proc/$p/environ 2>/dev/null && kill -KILL $p
+            grep -qz "^OMPI_COMM_WORLD_RANK=$rank\$" /proc/$p/environ 2>/dev/null &&
+                kill -KILL "$p" 2>/dev/null && hit=$((hit + 1))
         done
+        # The kill must have hit the rank's one process (not a job that had ended already, nor
+        # a rank that was not found), and the job must not end as if nothing had happened.
+        [ "$hit" -eq 1 ] || { kill_job KILL; fail "the kill of rank $rank hit $hit processes, expected 1"; }
         wait "$JOB" 2>/dev/null
+        rc=$?
+        [ "$rc" -ne 0 ] || fail "the job exited 0 after the kill of rank $rank"
         for i in $(seq 1 100); do  # mpirun ends the other ranks within a few seconds
             [ -z "$(pgrep -s "$JOB")" ] && break
             sleep 0.1
