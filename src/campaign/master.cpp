@@ -69,6 +69,7 @@ class Dispatcher {
     void send_task(const Item& item);
     void end_when_nothing_fits();
     void stop_at_deadline();
+    void stop_for_deadline();
     std::chrono::milliseconds wait_time() const;
     void receive(std::chrono::milliseconds wait);
     void check_silence();
@@ -315,12 +316,17 @@ void Dispatcher::send_task(const Item& item) {
     busy_[w] = b;
 }
 
-// Nothing left fits before the deadline: end the run as stopped (resumable).
-void Dispatcher::end_when_nothing_fits() {
+// The deadline ends the run as stopped (resumable); the queued tasks were skipped for it.
+void Dispatcher::stop_for_deadline() {
     draining_ = true;
     report_.stopped = true;
     report_.stop_reason = "the deadline";
     report_.deadline_skipped = static_cast<int>(queue_.size());
+}
+
+// Nothing left fits before the deadline: end the run as stopped (resumable).
+void Dispatcher::end_when_nothing_fits() {
+    stop_for_deadline();
     log_ << "campaign: the deadline is " << format_duration(std::max(0.0, seconds_to_deadline()))
          << " away (grace " << format_duration(options_.grace) << "): none of the " << queue_.size()
          << " realization(s) left is expected to finish before it "
@@ -330,10 +336,7 @@ void Dispatcher::end_when_nothing_fits() {
 }
 
 void Dispatcher::stop_at_deadline() {
-    draining_ = true;
-    report_.stopped = true;
-    report_.stop_reason = "the deadline";
-    report_.deadline_skipped = static_cast<int>(queue_.size());
+    stop_for_deadline();
     log_ << "campaign: the deadline is " << format_duration(std::max(0.0, seconds_to_deadline()))
          << " away: stopping the " << busy_.size() << " running realization(s)"
          << (ckpt_ ? " (their states are saved)" : "") << std::endl;
