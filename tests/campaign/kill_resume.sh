@@ -27,28 +27,31 @@ if [ "$NP" -eq 0 ]; then
     # rebuilt file is renamed into place, mid the run's first record.
     for point in journal:2 hdf5:1 rebuild:1 journal:1; do crash $point; done
 fi
-kills=0
-for i in 1 2 3 4 5; do
-    start_job "${CMD[@]}"
-    random_sleep $((NP == 0 ? 150 : 400)) $((NP == 0 ? 700 : 1800))
-    kill_job KILL
-    kills=$((kills + 1))
-    "$EXE" status "$STORE" >status.$i.txt 2>&1 || fail "status failed on a killed store"
-    echo "kill $i: $(grep progress status.$i.txt)" >&2
-done
+# rank_pids RANK: the job's processes of that MPI rank (one, while it runs).
+rank_pids() {
+    local p
+    for p in $(pgrep -s "$JOB" -x campaign); do
+        grep -qz "^OMPI_COMM_WORLD_RANK=$1\$" /proc/$p/environ 2>/dev/null && echo "$p"
+    done
+}
 if [ "$NP" -gt 0 ]; then
-    # One rank alone: a worker, then the master (mpirun then ends the rest of the job).
+    # One rank alone: a worker, then the master (mpirun then ends the rest of the job). First,
+    # while the store is nearly empty, so that the killed rank is in the middle of the campaign
+    # (later, the whole-job kills below may have stored everything, leaving nothing to kill).
     for rank in $((NP - 1)) 0; do
         start_job "${CMD[@]}"
-        random_sleep 600 1200
-        hit=0
-        for p in $(pgrep -s "$JOB" -x campaign); do
-            grep -qz "^OMPI_COMM_WORLD_RANK=$rank\$" /proc/$p/environ 2>/dev/null &&
-                kill -KILL "$p" 2>/dev/null && hit=$((hit + 1))
+        for i in $(seq 1 200); do  # the rank's process, once mpirun has started it
+            pids=$(rank_pids "$rank")
+            [ -n "$pids" ] && break
+            sleep 0.05
         done
-        # The kill must have hit the rank's one process (not a job that had ended already, nor
-        # a rank that was not found), and the job must not end as if nothing had happened.
-        [ "$hit" -eq 1 ] || { kill_job KILL; fail "the kill of rank $rank hit $hit processes, expected 1"; }
+        [ "$(echo "$pids" | wc -w)" -eq 1 ] ||
+            { kill_job KILL; fail "rank $rank: expected one process, found '$pids'"; }
+        random_sleep 300 900
+        # The kill must hit that process (not one that has ended), and the job must not end
+        # as if nothing had happened.
+        kill -KILL "$pids" 2>/dev/null ||
+            { kill_job KILL; fail "the kill of rank $rank hit no process (it had ended)"; }
         wait "$JOB" 2>/dev/null
         rc=$?
         [ "$rc" -ne 0 ] || fail "the job exited 0 after the kill of rank $rank"
@@ -60,6 +63,15 @@ if [ "$NP" -gt 0 ]; then
         echo "kill of rank $rank: $("$EXE" status "$STORE" | grep progress)" >&2
     done
 fi
+kills=0
+for i in 1 2 3 4 5; do
+    start_job "${CMD[@]}"
+    random_sleep $((NP == 0 ? 150 : 400)) $((NP == 0 ? 700 : 1800))
+    kill_job KILL
+    kills=$((kills + 1))
+    "$EXE" status "$STORE" >status.$i.txt 2>&1 || fail "status failed on a killed store"
+    echo "kill $i: $(grep progress status.$i.txt)" >&2
+done
 # The last crash: everything stored, the HDF5 file closed, its sync record not yet written.
 [ "$NP" -eq 0 ] && crash close:1
 run_expect 0 final "${CMD[@]}"
