@@ -51,6 +51,601 @@ Clock::duration to_duration(double seconds) {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
+// One run of the master: the queue, the workers' states, the checkpoint bookkeeping and the
+// report, with one method per step of the loop in run() and one per kind of message.
+class Dispatcher {
+  public:
+    Dispatcher(MasterChannel& channel, store::Store& store, const StopRequests& stop,
+               const MasterOptions& options, std::ostream& log, const std::vector<TaskRef>& todo,
+               Totals totals);
+    MasterReport run();
+
+  private:
+    // The loop's steps, in their order.
+    void begin_drain(StopLevel level);
+    void stop_running();
+    bool dispatch_tasks();
+    std::deque<Item>::iterator pick_task();
+    void send_task(const Item& item);
+    void end_when_nothing_fits();
+    void stop_at_deadline();
+    void stop_for_deadline();
+    std::chrono::milliseconds wait_time() const;
+    void receive(std::chrono::milliseconds wait);
+    void check_silence();
+    MasterReport finish();
+
+    // Messages from workers.
+    void handle(int worker, const Message& m);
+    void on_checkpoint(int worker, const Message& m);
+    void on_heartbeat(int worker);
+    void on_late_reply(int worker, const Message& m);
+    void on_reply(int worker, const Message& m);
+    void on_error(int worker, const Item& item, const Busy& was, const Message& m);
+    void on_interrupted(int worker, const Item& item, const Busy& was, const Message& m);
+    void accept_result(int worker, const Item& item, const Message& m);
+    void record_error(int worker, const Item& item, const std::string& reason);
+
+    // Helpers.
+    CheckpointKey key_of(const Item& item) const;
+    bool save_state(int worker, const Item& item, double seconds,
+                    std::span<const std::uint8_t> state);
+    void update_running();
+    void print_progress();
+    void send_stop_now();
+    Clock::duration silence_limit(const Item& item) const;
+    double correction() const;
+    bool measured() const;
+    double seconds_to_deadline() const;
+
+    MasterChannel& channel_;
+    store::Store& store_;
+    const StopRequests& stop_;
+    const MasterOptions& options_;
+    std::ostream& log_;
+    const std::vector<TaskRef>& todo_;
+    const Totals totals_;
+
+    const Clock::time_point start_ = Clock::now();
+    const double cpu0_ = thread_cpu_seconds();
+    MasterReport report_;
+    std::deque<Item> queue_;
+    std::vector<int> errors_;
+    std::deque<int> idle_;
+    std::map<int, Busy> busy_;
+    std::map<int, Item> lost_;      // silent workers and the realization they were running
+    std::set<int> revived_;         // lost workers heard from again (reported once)
+    std::vector<char> finished_;    // a result was stored by this run
+    std::vector<char> reassigned_;  // handed to another worker after a silence
+    std::map<std::size_t, std::uint64_t> digest_;  // reassigned and stored: physics digest
+
+    bool draining_ = false, stop_sent_ = false, stop_announced_ = false;
+    Clock::time_point drain_deadline_{};
+    const bool progress_;
+    Clock::duration interval_;
+    Clock::time_point next_progress_;
+    int failed_now_;
+    // ETA weighted by the cost model, corrected by the worker seconds measured so far. The cost
+    // model's expected_seconds assume a pessimistic 100 ns per particle-step; 0.5 of that is the
+    // prior until a realization has finished.
+    CostEta eta_;
+    bool costs_known_ = true;
+
+    CheckpointFiles* const ckpt_;  // checkpoint files, or null
+    char host_[256] = {};          // for the running file
+    // Expected seconds of a task: the cost model corrected by the measured durations.
+    double measured_seconds_;
+    double measured_expected_;
+    std::vector<double> saved_before_;  // seconds in a checkpoint file
+    const bool timed_;
+    bool told_unmeasured_ = false;
+    std::set<std::size_t> hopeless_;  // tasks warned about: longer than the allocation
+    // Seconds this run may compute: from its start to the deadline minus the grace.
+    double allocation_ = 1e300;
+};
+
+Dispatcher::Dispatcher(MasterChannel& channel, store::Store& store, const StopRequests& stop,
+                       const MasterOptions& options, std::ostream& log,
+                       const std::vector<TaskRef>& todo, Totals totals)
+    : channel_(channel),
+      store_(store),
+      stop_(stop),
+      options_(options),
+      log_(log),
+      todo_(todo),
+      totals_(totals),
+      errors_(todo.size(), 0),
+      finished_(todo.size(), 0),
+      reassigned_(todo.size(), 0),
+      progress_(options.progress_interval > 0),
+      interval_(to_duration(progress_ ? options.progress_interval : 1e9)),
+      next_progress_(start_ + interval_),
+      failed_now_(totals.failed),
+      eta_(channel.workers(), 0.5),
+      ckpt_(options.checkpoints),
+      measured_seconds_(options.measured_seconds),
+      measured_expected_(options.measured_expected),
+      saved_before_(todo.size(), 0.0),
+      timed_(options.deadline.has_value()) {
+    for (std::size_t i = 0; i < todo_.size(); ++i)
+        queue_.push_back({i, 1});
+    for (int w = 1; w <= channel_.workers(); ++w)
+        idle_.push_back(w);
+    for (const auto& t : todo_) {
+        eta_.add_pending(t.expected_seconds);
+        costs_known_ = costs_known_ && t.expected_seconds > 0;
+    }
+    if (gethostname(host_, sizeof host_ - 1) != 0) std::snprintf(host_, sizeof host_, "unknown");
+    if (ckpt_)
+        for (std::size_t i = 0; i < todo_.size(); ++i)
+            saved_before_[i] = ckpt_->peek_seconds(key_of(Item{i, 1})).value_or(0.0);
+    if (timed_) allocation_ = *options_.deadline - store::unix_now() - options_.grace;
+}
+
+MasterReport Dispatcher::run() {
+    for (;;) {
+        const StopLevel level = stop_.level();
+        if (level != StopLevel::none && !draining_) begin_drain(level);
+        if (draining_ && !stop_sent_ && !busy_.empty() &&
+            (stop_.level() == StopLevel::now || Clock::now() >= drain_deadline_))
+            stop_running();
+        if (dispatch_tasks()) update_running();
+        if (timed_ && !draining_ && busy_.empty() && !queue_.empty()) end_when_nothing_fits();
+        if (timed_ && !draining_ && !busy_.empty() && seconds_to_deadline() <= options_.grace)
+            stop_at_deadline();
+        if (busy_.empty() && (queue_.empty() || draining_)) break;
+        receive(wait_time());
+        check_silence();
+        if (progress_ && Clock::now() >= next_progress_) {
+            print_progress();
+            next_progress_ += interval_;
+        }
+    }
+    return finish();
+}
+
+// A stop request: no more tasks; running ones may finish within the grace (drain) or are
+// stopped at once (now, by stop_running on the same pass).
+void Dispatcher::begin_drain(StopLevel level) {
+    draining_ = true;
+    report_.stopped = true;
+    report_.stop_reason = stop_.reason();
+    // With a deadline the running realizations were started because they are expected to end
+    // before deadline - grace: a drain (Slurm's warning signal comes with up to a minute's
+    // jitter) lets them go on until then, at least the grace time.
+    const double until =
+        timed_ ? std::max(options_.grace, seconds_to_deadline() - options_.grace) : options_.grace;
+    drain_deadline_ = Clock::now() + to_duration(until);
+    if (ckpt_ && level == StopLevel::drain)
+        for (const auto& [w, b] : busy_)
+            channel_.send(w,
+                          Message::make(MessageKind::checkpoint_now, todo_[b.item.index].task_id));
+    log_ << "campaign: " << report_.stop_reason << ": handing out no more tasks";
+    if (!busy_.empty()) {
+        if (level == StopLevel::now) {
+            log_ << "; stopping the " << busy_.size() << " running realization(s) now";
+            stop_announced_ = true;
+        } else
+            log_ << "; the " << busy_.size() << " running realization(s) may finish within "
+                 << format_duration(until) << " (signal again to stop them now)";
+    }
+    log_ << std::endl;
+}
+
+void Dispatcher::stop_running() {
+    if (!stop_announced_)
+        log_ << "campaign: stopping the " << busy_.size() << " running realization(s)" << std::endl;
+    send_stop_now();
+}
+
+// Hands queued tasks to idle workers; returns whether any was handed out.
+bool Dispatcher::dispatch_tasks() {
+    bool dispatched = false;
+    while (!draining_ && !idle_.empty() && !queue_.empty()) {
+        const auto pick = pick_task();
+        if (pick == queue_.end()) break;
+        const Item item = *pick;
+        queue_.erase(pick);
+        send_task(item);
+        dispatched = true;
+    }
+    return dispatched;
+}
+
+// The next task: the first in the queue (most expensive first); with a deadline, the first
+// expected to end in time, or end() when none is. Until something of this campaign is measured
+// the cost model's seconds are a guess (off by 2x either way); skipping on a guess could start
+// nothing, allocation after allocation. So the estimate filters only once a result has been
+// measured.
+std::deque<Item>::iterator Dispatcher::pick_task() {
+    auto pick = queue_.begin();
+    if (timed_ && !measured() && !told_unmeasured_) {
+        told_unmeasured_ = true;
+        log_ << "campaign: nothing of this campaign is measured yet: realizations are "
+                "handed out until the deadline minus the grace, when running ones are "
+                "stopped; the deadline's estimates start with the first result"
+             << std::endl;
+    }
+    if (!timed_ || !measured()) return pick;
+    const double left = seconds_to_deadline() - options_.grace;
+    for (; pick != queue_.end(); ++pick) {
+        const TaskRef& t = todo_[pick->index];
+        const double need =
+            std::max(0.0, t.expected_seconds * correction() - saved_before_[pick->index]);
+        if (need <= left) break;
+        if (!ckpt_ && need > allocation_ && hopeless_.insert(pick->index).second)
+            log_ << "campaign: warning: '" << t.label << "' #" << t.realization
+                 << " is expected to need " << format_duration(need)
+                 << ", more than this allocation's " << format_duration(allocation_)
+                 << ", and checkpoints are off: it cannot finish in an allocation "
+                    "this long (raise the time limit or drop --no-checkpoints)"
+                 << std::endl;
+        // Longer than a whole allocation like this one: it can only ever finish in pieces, so
+        // with checkpoints it starts (its state is saved at the deadline) rather than never.
+        if (ckpt_ && need > allocation_ && left > 0.25 * allocation_) {
+            log_ << "campaign: '" << t.label << "' #" << t.realization << " is expected to need "
+                 << format_duration(need) << ", more than this allocation's "
+                 << format_duration(allocation_)
+                 << "; started anyway: its state is saved at the deadline" << std::endl;
+            break;
+        }
+    }
+    return pick;
+}
+
+// Sends item to the first idle worker, with its checkpoint's state when there is a usable one.
+void Dispatcher::send_task(const Item& item) {
+    const int w = idle_.front();
+    idle_.pop_front();
+    Message task = Message::make(MessageKind::task, todo_[item.index].task_id, item.attempt);
+    Busy b{item, Clock::now(), store::unix_now()};
+    if (ckpt_) {
+        std::string refusal;
+        if (auto loaded = ckpt_->read(key_of(item), &refusal)) {
+            task.payload = std::move(loaded->state);
+            b.resumed = true;
+            b.base_seconds = loaded->worker_seconds;
+            saved_before_[item.index] = loaded->worker_seconds;
+            ++report_.resumed;
+        } else {
+            saved_before_[item.index] = 0.0;
+            if (!refusal.empty()) log_ << "campaign: " << refusal << std::endl;
+        }
+    }
+    channel_.send(w, task);
+    busy_[w] = b;
+}
+
+// The deadline ends the run as stopped (resumable); the queued tasks were skipped for it.
+void Dispatcher::stop_for_deadline() {
+    draining_ = true;
+    report_.stopped = true;
+    report_.stop_reason = "the deadline";
+    report_.deadline_skipped = static_cast<int>(queue_.size());
+}
+
+// Nothing left fits before the deadline: end the run as stopped (resumable).
+void Dispatcher::end_when_nothing_fits() {
+    stop_for_deadline();
+    log_ << "campaign: the deadline is " << format_duration(std::max(0.0, seconds_to_deadline()))
+         << " away (grace " << format_duration(options_.grace) << "): none of the " << queue_.size()
+         << " realization(s) left is expected to finish before it "
+         << "(the shortest needs about "
+         << format_duration(todo_[queue_.back().index].expected_seconds * correction())
+         << "); they run in the next allocation" << std::endl;
+}
+
+void Dispatcher::stop_at_deadline() {
+    stop_for_deadline();
+    log_ << "campaign: the deadline is " << format_duration(std::max(0.0, seconds_to_deadline()))
+         << " away: stopping the " << busy_.size() << " running realization(s)"
+         << (ckpt_ ? " (their states are saved)" : "") << std::endl;
+    send_stop_now();
+    stop_announced_ = true;
+}
+
+// How long to wait for a message: until the next thing that is due (progress line, end of the
+// drain, deadline, a worker's silence limit), at most max_wait.
+std::chrono::milliseconds Dispatcher::wait_time() const {
+    auto wait = options_.max_wait;
+    const auto now = Clock::now();
+    auto bound = [&](Clock::time_point t) {
+        if (t > now)
+            wait = std::min(wait, std::chrono::ceil<std::chrono::milliseconds>(t - now));
+        else
+            wait = std::chrono::milliseconds(0);
+    };
+    if (progress_) bound(next_progress_);
+    if (draining_ && !stop_sent_) bound(drain_deadline_);
+    if (timed_ && !draining_)
+        bound(now + to_duration(std::max(0.0, seconds_to_deadline() - options_.grace)));
+    for (const auto& [w, b] : busy_)
+        bound(b.heard + silence_limit(b.item) + std::chrono::milliseconds(1));
+    return wait;
+}
+
+void Dispatcher::receive(std::chrono::milliseconds wait) {
+    if (auto msg = channel_.receive(wait)) {
+        handle(msg->first, msg->second);
+        // Drain whatever else is already waiting before handing out more.
+        while (auto more = channel_.receive(std::chrono::milliseconds(0)))
+            handle(more->first, more->second);
+    }
+}
+
+// Busy workers silent for longer than their realization's limit: reported, and the
+// realization goes to the front of the queue for another worker.
+void Dispatcher::check_silence() {
+    const auto now = Clock::now();
+    for (auto it = busy_.begin(); it != busy_.end();) {
+        const Item item = it->second.item;
+        const auto limit = silence_limit(item);
+        if (now - it->second.heard <= limit) {
+            ++it;
+            continue;
+        }
+        const TaskRef& t = todo_[item.index];
+        log_ << "campaign: worker " << it->first << " has been silent for "
+             << format_duration(std::chrono::duration<double>(now - it->second.heard).count())
+             << " (limit " << format_duration(std::chrono::duration<double>(limit).count())
+             << ") running '" << t.label << "' #" << t.realization << "; "
+             << (draining_ ? "it runs again on resume" : "handing it to another worker")
+             << std::endl;
+        lost_[it->first] = item;
+        reassigned_[item.index] = 1;
+        ++report_.reassigned;
+        if (!draining_) queue_.push_front({item.index, item.attempt + 1});
+        it = busy_.erase(it);
+    }
+}
+
+MasterReport Dispatcher::finish() {
+    report_.not_started = static_cast<int>(queue_.size());
+    if (ckpt_) ckpt_->remove_dir_if_empty();
+    if (!options_.running_file.empty()) {
+        std::error_code ec;
+        std::filesystem::remove(options_.running_file, ec);
+    }
+    report_.silent_at_end = static_cast<int>(lost_.size());
+    report_.wall_seconds = seconds_since(start_);
+    report_.cpu_seconds = thread_cpu_seconds() - cpu0_;
+    if (progress_) print_progress();
+    return report_;
+}
+
+void Dispatcher::handle(int worker, const Message& m) {
+    if (m.kind == MessageKind::checkpoint)
+        on_checkpoint(worker, m);
+    else if (m.kind == MessageKind::heartbeat)
+        on_heartbeat(worker);
+    else if (lost_.count(worker))
+        on_late_reply(worker, m);
+    else
+        on_reply(worker, m);
+}
+
+void Dispatcher::on_checkpoint(int worker, const Message& m) {
+    const auto it = busy_.find(worker);
+    if (!ckpt_ || it == busy_.end() || todo_[it->second.item.index].task_id != m.task) return;
+    it->second.heard = Clock::now();
+    if (save_state(worker, it->second.item, it->second.base_seconds + m.seconds, m.payload))
+        it->second.saved_seconds = m.seconds;
+}
+
+void Dispatcher::on_heartbeat(int worker) {
+    if (const auto it = busy_.find(worker); it != busy_.end())
+        it->second.heard = Clock::now();
+    else if (lost_.count(worker) && revived_.insert(worker).second)
+        log_ << "campaign: worker " << worker << " is heard from again; its realization "
+             << "runs elsewhere too (the first result is stored, the other compared)" << std::endl;
+}
+
+// The late reply of a realization that was handed to another worker.
+void Dispatcher::on_late_reply(int worker, const Message& m) {
+    const auto lt = lost_.find(worker);
+    const Item item = lt->second;
+    lost_.erase(lt);
+    revived_.erase(worker);
+    idle_.push_back(worker);
+    if (todo_[item.index].task_id == m.task && m.kind == MessageKind::result)
+        accept_result(worker, item, m);
+}
+
+// The reply of a busy worker: a result, an error or an interruption; the worker is idle again.
+void Dispatcher::on_reply(int worker, const Message& m) {
+    const auto it = busy_.find(worker);
+    if (it == busy_.end() || todo_[it->second.item.index].task_id != m.task) {
+        log_ << "campaign: warning: unexpected message from worker " << worker << " (task "
+             << m.task << "); ignored" << std::endl;
+        return;
+    }
+    const Item item = it->second.item;
+    const Busy was = it->second;
+    busy_.erase(it);
+    idle_.push_back(worker);
+    update_running();
+    switch (m.kind) {
+        case MessageKind::result:
+            accept_result(worker, item, m);
+            break;
+        case MessageKind::error:
+            on_error(worker, item, was, m);
+            break;
+        case MessageKind::interrupted:
+            on_interrupted(worker, item, was, m);
+            break;
+        default:
+            log_ << "campaign: warning: worker " << worker << " sent message kind "
+                 << static_cast<int>(m.kind) << "; ignored" << std::endl;
+    }
+}
+
+void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const Message& m) {
+    // The other copy of a reassigned realization was stored already.
+    if (!finished_[item.index])
+        record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
+    // A state that made its realization raise must not be tried again.
+    if (ckpt_ && was.resumed && !finished_[item.index]) {
+        ckpt_->remove(key_of(item));
+        saved_before_[item.index] = 0.0;
+        log_ << "campaign: the checkpoint of '" << todo_[item.index].label << "' #"
+             << todo_[item.index].realization
+             << " is removed: the next attempt starts from the beginning" << std::endl;
+    }
+}
+
+void Dispatcher::on_interrupted(int worker, const Item& item, const Busy& was, const Message& m) {
+    if (finished_[item.index]) return;
+    ++report_.interrupted;
+    if (ckpt_ && !m.payload.empty() &&
+        save_state(worker, item, was.base_seconds + m.seconds, m.payload)) {
+        report_.saved_worker_seconds += m.seconds;
+        saved_before_[item.index] = was.base_seconds + m.seconds;
+        log_ << "campaign: '" << todo_[item.index].label << "' #" << todo_[item.index].realization
+             << " stopped after " << format_duration(m.seconds) << " on worker " << worker
+             << "; its state is saved and continues on resume" << std::endl;
+    } else {
+        const double thrown = std::max(0.0, m.seconds - was.saved_seconds);
+        report_.lost_worker_seconds += thrown;
+        report_.saved_worker_seconds += m.seconds - thrown;
+    }
+}
+
+// A result for item from worker: checked, then stored unless this run stored one already (a
+// reassigned realization), in which case it is compared with it.
+void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
+    const TaskRef& t = todo_[item.index];
+    engine::RealizationResult r;
+    try {
+        r = store::decode_result(m.payload, "result from worker " + std::to_string(worker));
+        if (r.seed != t.seed)
+            throw core::StoreError("result from worker " + std::to_string(worker) + " has seed " +
+                                   std::to_string(r.seed) + ", expected " + std::to_string(t.seed));
+    } catch (const core::StoreError& e) {
+        if (!finished_[item.index]) record_error(worker, item, e.what());
+        return;
+    }
+    if (finished_[item.index]) {
+        const bool same = store::physics_digest(r) == digest_[item.index];
+        ++(same ? report_.late_identical : report_.late_different);
+        log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '" << t.label
+             << "' #" << t.realization << " (worker " << worker << ") is "
+             << (same ? "identical to the stored one; stored once"
+                      : "DIFFERENT from the stored one (the engine is deterministic: a bad "
+                        "node or a bug); the first is kept")
+             << std::endl;
+        return;
+    }
+    // The worker time of a realization continued from a checkpoint includes the time its
+    // checkpoint holds.
+    const double seconds = m.seconds + saved_before_[item.index];
+    store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker, item.attempt, seconds,
+                                      store::unix_now(), m.payload});
+    finished_[item.index] = 1;
+    if (ckpt_) ckpt_->remove(key_of(item));
+    if (t.expected_seconds > 0 && seconds > 0) {
+        measured_seconds_ += seconds;
+        measured_expected_ += t.expected_seconds;
+    }
+    if (reassigned_[item.index]) digest_[item.index] = store::physics_digest(r);
+    ++report_.stored;
+    eta_.finished(t.expected_seconds, seconds);
+    if (r.status == engine::Status::failed) {
+        ++report_.failed;
+        ++failed_now_;
+    }
+}
+
+// An attempt that raised: logged in the store, retried once more unless draining or out of
+// attempts.
+void Dispatcher::record_error(int worker, const Item& item, const std::string& reason) {
+    const TaskRef& t = todo_[item.index];
+    store_.append(store::ErrorRecord{t.label, t.realization, t.seed, worker, item.attempt,
+                                     store::unix_now(), reason});
+    ++report_.errors;
+    ++errors_[item.index];
+    if (errors_[item.index] < options_.max_attempts && !draining_) {
+        log_ << "campaign: '" << t.label << "' #" << t.realization << " raised an error on "
+             << "worker " << worker << " (" << reason << "); trying once more" << std::endl;
+        queue_.push_front({item.index, item.attempt + 1});
+    } else {
+        ++report_.gave_up;
+        ++failed_now_;
+        log_ << "campaign: '" << t.label << "' #" << t.realization << " failed "
+             << errors_[item.index] << " time(s) (" << reason << "); left for the next run"
+             << std::endl;
+    }
+}
+
+CheckpointKey Dispatcher::key_of(const Item& item) const {
+    const TaskRef& t = todo_[item.index];
+    return CheckpointKey{t.label, t.realization, t.seed, t.physics};
+}
+
+bool Dispatcher::save_state(int worker, const Item& item, double seconds,
+                            std::span<const std::uint8_t> state) {
+    try {
+        ckpt_->write(key_of(item), seconds, state);
+        ++report_.checkpoints_written;
+        return true;
+    } catch (const core::StoreError& e) {
+        log_ << "campaign: warning: the state of '" << todo_[item.index].label << "' #"
+             << todo_[item.index].realization << " from worker " << worker
+             << " could not be saved (" << e.what() << "); it will start over" << std::endl;
+        return false;
+    }
+}
+
+void Dispatcher::update_running() {
+    if (options_.running_file.empty()) return;
+    RunningFile f;
+    f.pid = static_cast<std::int64_t>(getpid());
+    f.host = host_;
+    f.updated_unix = store::unix_now();
+    for (const auto& [w, b] : busy_) {
+        const TaskRef& t = todo_[b.item.index];
+        f.tasks.push_back(
+            RunningTask{w, b.started_unix, b.item.attempt, b.resumed, t.realization, t.label});
+    }
+    write_running(options_.running_file, f);
+}
+
+void Dispatcher::print_progress() {
+    const double elapsed = seconds_since(start_);
+    const double rate = elapsed > 0 ? report_.stored / elapsed : 0.0;
+    log_ << progress_line(totals_.finished + report_.stored, totals_.total,
+                          static_cast<int>(busy_.size()), failed_now_, rate, elapsed,
+                          costs_known_ ? eta_.seconds_left() : -1.0)
+         << std::endl;
+}
+
+void Dispatcher::send_stop_now() {
+    for (const auto& [w, b] : busy_)
+        channel_.send(w, Message::make(MessageKind::stop_now, todo_[b.item.index].task_id));
+    stop_sent_ = true;
+}
+
+Clock::duration Dispatcher::silence_limit(const Item& item) const {
+    const double s =
+        options_.worker_timeout
+            ? *options_.worker_timeout
+            : std::max(options_.min_worker_timeout,
+                       options_.worker_timeout_factor * todo_[item.index].expected_seconds);
+    return to_duration(s);
+}
+
+bool Dispatcher::measured() const {
+    return measured_expected_ > 0 && measured_seconds_ > 0;
+}
+
+double Dispatcher::correction() const {
+    return measured() ? measured_seconds_ / measured_expected_ : 1.0;
+}
+
+double Dispatcher::seconds_to_deadline() const {
+    return timed_ ? *options_.deadline - store::unix_now() : 1e300;
+}
+
 }  // namespace
 
 Master::Master(MasterChannel& channel, store::Store& store, const StopRequests& stop,
@@ -58,453 +653,7 @@ Master::Master(MasterChannel& channel, store::Store& store, const StopRequests& 
     : channel_(channel), store_(store), stop_(stop), options_(options), log_(log) {}
 
 MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
-    const auto start = Clock::now();
-    const double cpu0 = thread_cpu_seconds();
-    MasterReport report;
-    std::deque<Item> queue;
-    for (std::size_t i = 0; i < todo.size(); ++i)
-        queue.push_back({i, 1});
-    std::vector<int> errors(todo.size(), 0);
-    std::deque<int> idle;
-    for (int w = 1; w <= channel_.workers(); ++w)
-        idle.push_back(w);
-    std::map<int, Busy> busy;
-    std::map<int, Item> lost;  // silent workers and the realization they were running
-    std::set<int> revived;     // lost workers heard from again (reported once)
-    std::vector<char> finished(todo.size(), 0);    // a result was stored by this run
-    std::vector<char> reassigned(todo.size(), 0);  // handed to another worker after a silence
-    std::map<std::size_t, std::uint64_t> digest;   // reassigned and stored: physics digest
-
-    bool draining = false, stop_sent = false, stop_announced = false;
-    Clock::time_point drain_deadline{};
-    const bool progress = options_.progress_interval > 0;
-    const auto interval = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(progress ? options_.progress_interval : 1e9));
-    auto next_progress = start + interval;
-    int failed_now = totals.failed;
-    // ETA weighted by the cost model, corrected by the worker seconds measured so far. The cost
-    // model's expected_seconds assume a pessimistic 100 ns per particle-step; 0.5 of that is the
-    // prior until a realization has finished.
-    CostEta eta(channel_.workers(), 0.5);
-    bool costs_known = true;
-    for (const auto& t : todo) {
-        eta.add_pending(t.expected_seconds);
-        costs_known = costs_known && t.expected_seconds > 0;
-    }
-
-    // Checkpoint files and the running file.
-    CheckpointFiles* const ckpt = options_.checkpoints;
-    auto key_of = [&](const Item& item) {
-        const TaskRef& t = todo[item.index];
-        return CheckpointKey{t.label, t.realization, t.seed, t.physics};
-    };
-    auto save_state = [&](int worker, const Item& item, double seconds,
-                          std::span<const std::uint8_t> state) {
-        try {
-            ckpt->write(key_of(item), seconds, state);
-            ++report.checkpoints_written;
-            return true;
-        } catch (const core::StoreError& e) {
-            log_ << "campaign: warning: the state of '" << todo[item.index].label << "' #"
-                 << todo[item.index].realization << " from worker " << worker
-                 << " could not be saved (" << e.what() << "); it will start over" << std::endl;
-            return false;
-        }
-    };
-    char host[256] = {};
-    if (gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "unknown");
-    auto update_running = [&] {
-        if (options_.running_file.empty()) return;
-        RunningFile f;
-        f.pid = static_cast<std::int64_t>(getpid());
-        f.host = host;
-        f.updated_unix = store::unix_now();
-        for (const auto& [w, b] : busy) {
-            const TaskRef& t = todo[b.item.index];
-            f.tasks.push_back(
-                RunningTask{w, b.started_unix, b.item.attempt, b.resumed, t.realization, t.label});
-        }
-        write_running(options_.running_file, f);
-    };
-    // Expected seconds of a task: the cost model corrected by the measured durations.
-    double measured_seconds = options_.measured_seconds;
-    double measured_expected = options_.measured_expected;
-    auto correction = [&] {
-        return measured_expected > 0 && measured_seconds > 0 ? measured_seconds / measured_expected
-                                                             : 1.0;
-    };
-    std::vector<double> saved_before(todo.size(), 0.0);  // seconds in a checkpoint file
-    if (ckpt)
-        for (std::size_t i = 0; i < todo.size(); ++i)
-            saved_before[i] = ckpt->peek_seconds(key_of(Item{i, 1})).value_or(0.0);
-    const bool timed = options_.deadline.has_value();
-    bool told_unmeasured = false;
-    std::set<std::size_t> hopeless;  // tasks warned about: longer than the allocation
-    // Seconds this run may compute: from its start to the deadline minus the grace.
-    const double allocation =
-        timed ? *options_.deadline - store::unix_now() - options_.grace : 1e300;
-    auto seconds_to_deadline = [&] {
-        return timed ? *options_.deadline - store::unix_now() : 1e300;
-    };
-
-    auto print_progress = [&] {
-        const double elapsed = seconds_since(start);
-        const double rate = elapsed > 0 ? report.stored / elapsed : 0.0;
-        log_ << progress_line(totals.finished + report.stored, totals.total,
-                              static_cast<int>(busy.size()), failed_now, rate, elapsed,
-                              costs_known ? eta.seconds_left() : -1.0)
-             << std::endl;
-    };
-
-    auto silence_limit = [&](const Item& item) {
-        const double s =
-            options_.worker_timeout
-                ? *options_.worker_timeout
-                : std::max(options_.min_worker_timeout,
-                           options_.worker_timeout_factor * todo[item.index].expected_seconds);
-        return to_duration(s);
-    };
-
-    auto record_error = [&](int worker, const Item& item, const std::string& reason) {
-        const TaskRef& t = todo[item.index];
-        store_.append(store::ErrorRecord{t.label, t.realization, t.seed, worker, item.attempt,
-                                         store::unix_now(), reason});
-        ++report.errors;
-        ++errors[item.index];
-        if (errors[item.index] < options_.max_attempts && !draining) {
-            log_ << "campaign: '" << t.label << "' #" << t.realization << " raised an error on "
-                 << "worker " << worker << " (" << reason << "); trying once more" << std::endl;
-            queue.push_front({item.index, item.attempt + 1});
-        } else {
-            ++report.gave_up;
-            ++failed_now;
-            log_ << "campaign: '" << t.label << "' #" << t.realization << " failed "
-                 << errors[item.index] << " time(s) (" << reason << "); left for the next run"
-                 << std::endl;
-        }
-    };
-
-    // A result for item from worker: checked, then stored unless this run stored one already
-    // (a reassigned realization), in which case it is compared with it.
-    auto accept_result = [&](int worker, const Item& item, const Message& m) {
-        const TaskRef& t = todo[item.index];
-        engine::RealizationResult r;
-        try {
-            r = store::decode_result(m.payload, "result from worker " + std::to_string(worker));
-            if (r.seed != t.seed)
-                throw core::StoreError("result from worker " + std::to_string(worker) +
-                                       " has seed " + std::to_string(r.seed) + ", expected " +
-                                       std::to_string(t.seed));
-        } catch (const core::StoreError& e) {
-            if (!finished[item.index]) record_error(worker, item, e.what());
-            return;
-        }
-        if (finished[item.index]) {
-            const bool same = store::physics_digest(r) == digest[item.index];
-            ++(same ? report.late_identical : report.late_different);
-            log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '" << t.label
-                 << "' #" << t.realization << " (worker " << worker << ") is "
-                 << (same ? "identical to the stored one; stored once"
-                          : "DIFFERENT from the stored one (the engine is deterministic: a bad "
-                            "node or a bug); the first is kept")
-                 << std::endl;
-            return;
-        }
-        // The worker time of a realization continued from a checkpoint includes the time its
-        // checkpoint holds.
-        const double seconds = m.seconds + saved_before[item.index];
-        store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker, item.attempt,
-                                          seconds, store::unix_now(), m.payload});
-        finished[item.index] = 1;
-        if (ckpt) ckpt->remove(key_of(item));
-        if (t.expected_seconds > 0 && seconds > 0) {
-            measured_seconds += seconds;
-            measured_expected += t.expected_seconds;
-        }
-        if (reassigned[item.index]) digest[item.index] = store::physics_digest(r);
-        ++report.stored;
-        eta.finished(t.expected_seconds, seconds);
-        if (r.status == engine::Status::failed) {
-            ++report.failed;
-            ++failed_now;
-        }
-    };
-
-    auto handle = [&](int worker, const Message& m) {
-        if (m.kind == MessageKind::checkpoint) {
-            const auto it = busy.find(worker);
-            if (!ckpt || it == busy.end() || todo[it->second.item.index].task_id != m.task) return;
-            it->second.heard = Clock::now();
-            if (save_state(worker, it->second.item, it->second.base_seconds + m.seconds, m.payload))
-                it->second.saved_seconds = m.seconds;
-            return;
-        }
-        if (m.kind == MessageKind::heartbeat) {
-            if (const auto it = busy.find(worker); it != busy.end())
-                it->second.heard = Clock::now();
-            else if (lost.count(worker) && revived.insert(worker).second)
-                log_ << "campaign: worker " << worker << " is heard from again; its realization "
-                     << "runs elsewhere too (the first result is stored, the other compared)"
-                     << std::endl;
-            return;
-        }
-        if (const auto lt = lost.find(worker); lt != lost.end()) {
-            // The late reply of a realization that was handed to another worker.
-            const Item item = lt->second;
-            lost.erase(lt);
-            revived.erase(worker);
-            idle.push_back(worker);
-            if (todo[item.index].task_id == m.task && m.kind == MessageKind::result)
-                accept_result(worker, item, m);
-            return;
-        }
-        const auto it = busy.find(worker);
-        if (it == busy.end() || todo[it->second.item.index].task_id != m.task) {
-            log_ << "campaign: warning: unexpected message from worker " << worker << " (task "
-                 << m.task << "); ignored" << std::endl;
-            return;
-        }
-        const Item item = it->second.item;
-        const Busy was = it->second;
-        busy.erase(it);
-        idle.push_back(worker);
-        update_running();
-        switch (m.kind) {
-            case MessageKind::result:
-                accept_result(worker, item, m);
-                break;
-            case MessageKind::error:
-                // The other copy of a reassigned realization was stored already.
-                if (!finished[item.index])
-                    record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
-                // A state that made its realization raise must not be tried again.
-                if (ckpt && was.resumed && !finished[item.index]) {
-                    ckpt->remove(key_of(item));
-                    saved_before[item.index] = 0.0;
-                    log_ << "campaign: the checkpoint of '" << todo[item.index].label << "' #"
-                         << todo[item.index].realization
-                         << " is removed: the next attempt starts from the beginning" << std::endl;
-                }
-                break;
-            case MessageKind::interrupted:
-                if (finished[item.index]) break;
-                ++report.interrupted;
-                if (ckpt && !m.payload.empty() &&
-                    save_state(worker, item, was.base_seconds + m.seconds, m.payload)) {
-                    report.saved_worker_seconds += m.seconds;
-                    saved_before[item.index] = was.base_seconds + m.seconds;
-                    log_ << "campaign: '" << todo[item.index].label << "' #"
-                         << todo[item.index].realization << " stopped after "
-                         << format_duration(m.seconds) << " on worker " << worker
-                         << "; its state is saved and continues on resume" << std::endl;
-                } else {
-                    const double thrown = std::max(0.0, m.seconds - was.saved_seconds);
-                    report.lost_worker_seconds += thrown;
-                    report.saved_worker_seconds += m.seconds - thrown;
-                }
-                break;
-            default:
-                log_ << "campaign: warning: worker " << worker << " sent message kind "
-                     << static_cast<int>(m.kind) << "; ignored" << std::endl;
-        }
-    };
-
-    // Busy workers silent for longer than their realization's limit: reported, and the
-    // realization goes to the front of the queue for another worker.
-    auto check_silence = [&] {
-        const auto now = Clock::now();
-        for (auto it = busy.begin(); it != busy.end();) {
-            const Item item = it->second.item;
-            const auto limit = silence_limit(item);
-            if (now - it->second.heard <= limit) {
-                ++it;
-                continue;
-            }
-            const TaskRef& t = todo[item.index];
-            log_ << "campaign: worker " << it->first << " has been silent for "
-                 << format_duration(std::chrono::duration<double>(now - it->second.heard).count())
-                 << " (limit " << format_duration(std::chrono::duration<double>(limit).count())
-                 << ") running '" << t.label << "' #" << t.realization << "; "
-                 << (draining ? "it runs again on resume" : "handing it to another worker")
-                 << std::endl;
-            lost[it->first] = item;
-            reassigned[item.index] = 1;
-            ++report.reassigned;
-            if (!draining) queue.push_front({item.index, item.attempt + 1});
-            it = busy.erase(it);
-        }
-    };
-
-    for (;;) {
-        const StopLevel level = stop_.level();
-        if (level != StopLevel::none && !draining) {
-            draining = true;
-            report.stopped = true;
-            report.stop_reason = stop_.reason();
-            // With a deadline the running realizations were started because they are expected
-            // to end before deadline - grace: a drain (Slurm's warning signal comes with up to a
-            // minute's jitter) lets them go on until then, at least the grace time.
-            const double until =
-                timed ? std::max(options_.grace, seconds_to_deadline() - options_.grace)
-                      : options_.grace;
-            drain_deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(until));
-            if (ckpt && level == StopLevel::drain)
-                for (const auto& [w, b] : busy)
-                    channel_.send(
-                        w, Message::make(MessageKind::checkpoint_now, todo[b.item.index].task_id));
-            log_ << "campaign: " << report.stop_reason << ": handing out no more tasks";
-            if (!busy.empty()) {
-                if (level == StopLevel::now) {
-                    log_ << "; stopping the " << busy.size() << " running realization(s) now";
-                    stop_announced = true;
-                } else
-                    log_ << "; the " << busy.size() << " running realization(s) may finish within "
-                         << format_duration(until) << " (signal again to stop them now)";
-            }
-            log_ << std::endl;
-        }
-        if (draining && !stop_sent && !busy.empty() &&
-            (stop_.level() == StopLevel::now || Clock::now() >= drain_deadline)) {
-            if (!stop_announced)
-                log_ << "campaign: stopping the " << busy.size() << " running realization(s)"
-                     << std::endl;
-            for (const auto& [w, b] : busy)
-                channel_.send(w, Message::make(MessageKind::stop_now, todo[b.item.index].task_id));
-            stop_sent = true;
-        }
-        bool dispatched = false;
-        while (!draining && !idle.empty() && !queue.empty()) {
-            // With a deadline: the first task (most expensive first) expected to end in time.
-            // Until something of this campaign is measured the cost model's seconds are a guess
-            // (off by 2x either way); skipping on a guess could start nothing, allocation after
-            // allocation. So the estimate filters only once a result has been measured.
-            auto pick = queue.begin();
-            const bool measured = measured_expected > 0 && measured_seconds > 0;
-            if (timed && !measured && !told_unmeasured) {
-                told_unmeasured = true;
-                log_ << "campaign: nothing of this campaign is measured yet: realizations are "
-                        "handed out until the deadline minus the grace, when running ones are "
-                        "stopped; the deadline's estimates start with the first result"
-                     << std::endl;
-            }
-            if (timed && measured) {
-                const double left = seconds_to_deadline() - options_.grace;
-                for (; pick != queue.end(); ++pick) {
-                    const TaskRef& t = todo[pick->index];
-                    const double need = std::max(
-                        0.0, t.expected_seconds * correction() - saved_before[pick->index]);
-                    if (need <= left) break;
-                    if (!ckpt && need > allocation && hopeless.insert(pick->index).second)
-                        log_ << "campaign: warning: '" << t.label << "' #" << t.realization
-                             << " is expected to need " << format_duration(need)
-                             << ", more than this allocation's " << format_duration(allocation)
-                             << ", and checkpoints are off: it cannot finish in an allocation "
-                                "this long (raise the time limit or drop --no-checkpoints)"
-                             << std::endl;
-                    // Longer than a whole allocation like this one: it can only ever finish in
-                    // pieces, so with checkpoints it starts (its state is saved at the
-                    // deadline) rather than never.
-                    if (ckpt && need > allocation && left > 0.25 * allocation) {
-                        log_ << "campaign: '" << t.label << "' #" << t.realization
-                             << " is expected to need " << format_duration(need)
-                             << ", more than this allocation's " << format_duration(allocation)
-                             << "; started anyway: its state is saved at the deadline" << std::endl;
-                        break;
-                    }
-                }
-                if (pick == queue.end()) break;
-            }
-            const Item item = *pick;
-            queue.erase(pick);
-            const int w = idle.front();
-            idle.pop_front();
-            Message task = Message::make(MessageKind::task, todo[item.index].task_id, item.attempt);
-            Busy b{item, Clock::now(), store::unix_now()};
-            if (ckpt) {
-                std::string refusal;
-                if (auto loaded = ckpt->read(key_of(item), &refusal)) {
-                    task.payload = std::move(loaded->state);
-                    b.resumed = true;
-                    b.base_seconds = loaded->worker_seconds;
-                    saved_before[item.index] = loaded->worker_seconds;
-                    ++report.resumed;
-                } else {
-                    saved_before[item.index] = 0.0;
-                    if (!refusal.empty()) log_ << "campaign: " << refusal << std::endl;
-                }
-            }
-            channel_.send(w, task);
-            busy[w] = b;
-            dispatched = true;
-        }
-        if (dispatched) update_running();
-        if (timed && !draining && busy.empty() && !queue.empty()) {
-            // Nothing left fits before the deadline: end the run as stopped (resumable).
-            draining = true;
-            report.stopped = true;
-            report.stop_reason = "the deadline";
-            report.deadline_skipped = static_cast<int>(queue.size());
-            log_ << "campaign: the deadline is "
-                 << format_duration(std::max(0.0, seconds_to_deadline())) << " away (grace "
-                 << format_duration(options_.grace) << "): none of the " << queue.size()
-                 << " realization(s) left is expected to finish before it "
-                 << "(the shortest needs about "
-                 << format_duration(todo[queue.back().index].expected_seconds * correction())
-                 << "); they run in the next allocation" << std::endl;
-        }
-        if (timed && !draining && !busy.empty() && seconds_to_deadline() <= options_.grace) {
-            draining = true;
-            report.stopped = true;
-            report.stop_reason = "the deadline";
-            report.deadline_skipped = static_cast<int>(queue.size());
-            log_ << "campaign: the deadline is "
-                 << format_duration(std::max(0.0, seconds_to_deadline())) << " away: stopping the "
-                 << busy.size() << " running realization(s)"
-                 << (ckpt ? " (their states are saved)" : "") << std::endl;
-            for (const auto& [w, b] : busy)
-                channel_.send(w, Message::make(MessageKind::stop_now, todo[b.item.index].task_id));
-            stop_sent = stop_announced = true;
-        }
-        if (busy.empty() && (queue.empty() || draining)) break;
-
-        auto wait = options_.max_wait;
-        const auto now = Clock::now();
-        auto bound = [&](Clock::time_point t) {
-            if (t > now)
-                wait = std::min(wait, std::chrono::ceil<std::chrono::milliseconds>(t - now));
-            else
-                wait = std::chrono::milliseconds(0);
-        };
-        if (progress) bound(next_progress);
-        if (draining && !stop_sent) bound(drain_deadline);
-        if (timed && !draining)
-            bound(now + to_duration(std::max(0.0, seconds_to_deadline() - options_.grace)));
-        for (const auto& [w, b] : busy)
-            bound(b.heard + silence_limit(b.item) + std::chrono::milliseconds(1));
-        if (auto msg = channel_.receive(wait)) {
-            handle(msg->first, msg->second);
-            // Drain whatever else is already waiting before handing out more.
-            while (auto more = channel_.receive(std::chrono::milliseconds(0)))
-                handle(more->first, more->second);
-        }
-        check_silence();
-        if (progress && Clock::now() >= next_progress) {
-            print_progress();
-            next_progress += interval;
-        }
-    }
-    report.not_started = static_cast<int>(queue.size());
-    if (ckpt) ckpt->remove_dir_if_empty();
-    if (!options_.running_file.empty()) {
-        std::error_code ec;
-        std::filesystem::remove(options_.running_file, ec);
-    }
-    report.silent_at_end = static_cast<int>(lost.size());
-    report.wall_seconds = seconds_since(start);
-    report.cpu_seconds = thread_cpu_seconds() - cpu0;
-    if (progress) print_progress();
-    return report;
+    return Dispatcher(channel_, store_, stop_, options_, log_, todo, totals).run();
 }
 
 }  // namespace hopper::campaign

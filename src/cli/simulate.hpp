@@ -6,19 +6,13 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <vector>
 
+#include "cli/exit_codes.hpp"  // run_simulate returns them
 #include "cli/snapshot_writer.hpp"
 #include "hopper/engine/params.hpp"
 
 namespace hopper::cli {
-
-// Exit codes of the campaign executable.
-enum ExitCode : int {
-    exit_ok = 0,
-    exit_error = 1,               // an unexpected failure (I/O, internal error)
-    exit_usage = 2,               // bad command line or sweep file (core::ConfigError)
-    exit_realization_failed = 3,  // the realization ended with status failed
-};
 
 struct SimulateOptions {
     std::filesystem::path sweep;  // empty with `point`: the scene comes from the store
@@ -56,5 +50,10 @@ StoredTask stored_task(const std::filesystem::path& store, const std::string& la
 // failed. Throws core::ConfigError for a bad sweep file or scene, std::runtime_error (or a
 // std::filesystem error) when snapshots cannot be written.
 int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& err);
+
+// `campaign simulate ARGS` (simulate_command.cpp): its options, checked, into SimulateOptions,
+// then run_simulate on stdout and stderr.
+void print_simulate_help(std::ostream& os);
+int simulate_command(const std::vector<std::string>& args);
 
 }  // namespace hopper::cli

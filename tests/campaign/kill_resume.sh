@@ -27,6 +27,42 @@ if [ "$NP" -eq 0 ]; then
     # rebuilt file is renamed into place, mid the run's first record.
     for point in journal:2 hdf5:1 rebuild:1 journal:1; do crash $point; done
 fi
+# rank_pids RANK: the job's processes of that MPI rank (one, while it runs).
+rank_pids() {
+    local p
+    for p in $(pgrep -s "$JOB" -x campaign); do
+        grep -qz "^OMPI_COMM_WORLD_RANK=$1\$" /proc/$p/environ 2>/dev/null && echo "$p"
+    done
+}
+if [ "$NP" -gt 0 ]; then
+    # One rank alone: a worker, then the master (mpirun then ends the rest of the job). First,
+    # while the store is nearly empty, so that the killed rank is in the middle of the campaign
+    # (later, the whole-job kills below may have stored everything, leaving nothing to kill).
+    for rank in $((NP - 1)) 0; do
+        start_job "${CMD[@]}"
+        for i in $(seq 1 200); do  # the rank's process, once mpirun has started it
+            pids=$(rank_pids "$rank")
+            [ -n "$pids" ] && break
+            sleep 0.05
+        done
+        [ "$(echo "$pids" | wc -w)" -eq 1 ] ||
+            { kill_job KILL; fail "rank $rank: expected one process, found '$pids'"; }
+        random_sleep 300 900
+        # The kill must hit that process (not one that has ended), and the job must not end
+        # as if nothing had happened.
+        kill -KILL "$pids" 2>/dev/null ||
+            { kill_job KILL; fail "the kill of rank $rank hit no process (it had ended)"; }
+        wait "$JOB" 2>/dev/null
+        rc=$?
+        [ "$rc" -ne 0 ] || fail "the job exited 0 after the kill of rank $rank"
+        for i in $(seq 1 100); do  # mpirun ends the other ranks within a few seconds
+            [ -z "$(pgrep -s "$JOB")" ] && break
+            sleep 0.1
+        done
+        [ -z "$(pgrep -s "$JOB")" ] || { kill_job KILL; fail "the job outlived the kill of rank $rank"; }
+        echo "kill of rank $rank: $("$EXE" status "$STORE" | grep progress)" >&2
+    done
+fi
 kills=0
 for i in 1 2 3 4 5; do
     start_job "${CMD[@]}"
@@ -36,23 +72,6 @@ for i in 1 2 3 4 5; do
     "$EXE" status "$STORE" >status.$i.txt 2>&1 || fail "status failed on a killed store"
     echo "kill $i: $(grep progress status.$i.txt)" >&2
 done
-if [ "$NP" -gt 0 ]; then
-    # One rank alone: a worker, then the master (mpirun then ends the rest of the job).
-    for rank in $((NP - 1)) 0; do
-        start_job "${CMD[@]}"
-        random_sleep 600 1200
-        for p in $(pgrep -s "$JOB" -x campaign); do
-            grep -qz "^OMPI_COMM_WORLD_RANK=$rank\$" /proc/$p/environ 2>/dev/null && kill -KILL $p
-        done
-        wait "$JOB" 2>/dev/null
-        for i in $(seq 1 100); do  # mpirun ends the other ranks within a few seconds
-            [ -z "$(pgrep -s "$JOB")" ] && break
-            sleep 0.1
-        done
-        [ -z "$(pgrep -s "$JOB")" ] || { kill_job KILL; fail "the job outlived the kill of rank $rank"; }
-        echo "kill of rank $rank: $("$EXE" status "$STORE" | grep progress)" >&2
-    done
-fi
 # The last crash: everything stored, the HDF5 file closed, its sync record not yet written.
 [ "$NP" -eq 0 ] && crash close:1
 run_expect 0 final "${CMD[@]}"

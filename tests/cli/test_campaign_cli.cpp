@@ -239,6 +239,37 @@ TEST(CampaignCli, HelpAndVersion) {
     EXPECT_EQ(version.out.rfind("campaign (hopper) ", 0), 0u) << version.out;
 }
 
+TEST(CampaignCli, EveryListedCommandHasHelpAndRuns) {
+    // One table (src/cli/commands.hpp) drives the list, `help NAME` and dispatch: every command
+    // `--help` lists answers `help NAME` and `NAME --help` with the same text, and the list has
+    // the commands and exit codes this build documents.
+    const Outcome help = campaign("--help");
+    ASSERT_EQ(help.code, 0);
+    const auto begin = help.out.find("commands:\n");
+    const auto end = help.out.find("\n\n", begin);
+    ASSERT_NE(begin, std::string::npos) << help.out;
+    std::istringstream list(help.out.substr(begin + 10, end - begin - 10));
+    std::vector<std::string> names;
+    for (std::string line; std::getline(list, line);) {
+        std::istringstream words(line);
+        std::string name;
+        words >> name;
+        names.push_back(name);
+    }
+    EXPECT_EQ(names, (std::vector<std::string>{"run", "status", "analyze", "plot", "export",
+                                               "simulate", "submit"}));
+    for (const auto& name : names) {
+        const Outcome h = campaign("help " + name);
+        EXPECT_EQ(h.code, 0) << name << "\n" << h.err;
+        EXPECT_NE(h.out.find("usage: campaign " + name), std::string::npos) << name << h.out;
+        EXPECT_EQ(campaign(name + " --help").out, h.out) << name;
+    }
+    for (const char* code :
+         {"  0  success", "  1  unexpected or store error", "  2  bad command line or sweep file",
+          "  3  realization(s) failed", "  4  stopped by a signal (run; resumable)"})
+        EXPECT_NE(help.out.find(code), std::string::npos) << code << "\n" << help.out;
+}
+
 TEST(CampaignCli, SnapshotsWriteDumpFrames) {
     const fs::path dir = scratch() / "frames";
     fs::remove_all(dir);
