@@ -1,6 +1,7 @@
 #include "hopper/stats/distributions.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/normal.hpp>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -29,20 +30,7 @@ double normal_quantile(double p) {
     if (!(p > 0.0 && p < 1.0))
         throw std::invalid_argument("normal_quantile: p must be in (0, 1), got " +
                                     std::to_string(p));
-    // A&S 26.2.23 for the lower tail q = min(p, 1-p): t = sqrt(-2 ln q),
-    //   z ~ -(t - (c0 + c1 t + c2 t^2) / (1 + d1 t + d2 t^2 + d3 t^3)),  |error| < 4.5e-4.
-    const double q = std::min(p, 1.0 - p);
-    const double t = std::sqrt(-2.0 * std::log(q));
-    double z = -(t - (2.515517 + 0.802853 * t + 0.010328 * t * t) /
-                         (1.0 + 1.432788 * t + 0.189269 * t * t + 0.001308 * t * t * t));
-    // Halley steps on f(z) = Phi(z) - q with f' = phi(z), f'' = -z phi(z):
-    //   u = f / phi,  z <- z - u / (1 + z u / 2).  Cubic convergence: two steps reach 1e-16.
-    for (int i = 0; i < 3; ++i) {
-        const double phi = std::exp(-0.5 * z * z) / std::sqrt(2.0 * std::numbers::pi);
-        const double u = (normal_cdf(z) - q) / phi;
-        z -= u / (1.0 + 0.5 * z * u);
-    }
-    return p < 0.5 ? z : -z;
+    return boost::math::quantile(boost::math::normal_distribution<double>(), p);
 }
 
 double chi2_cdf(double x, double k) {

@@ -1,6 +1,8 @@
 #pragma once
 // Distribution functions used by the statistics layer: normal, chi-square, Kolmogorov and
-// binomial. Built on special_functions.hpp; std only.
+// binomial. The normal quantile comes from Boost.Math and the chi-square functions from
+// special_functions.hpp (Boost.Math too); the Kolmogorov and binomial ones are written here
+// (Boost 1.74 has no Kolmogorov distribution; the binomial test's tie rule is our own).
 //
 // Invalid arguments throw std::invalid_argument (programming errors, never data).
 
@@ -9,8 +11,7 @@ namespace hopper::stats {
 // Standard normal distribution function Phi(x) = 1/2 erfc(-x / sqrt 2).
 double normal_cdf(double x);
 
-// Standard normal quantile z_p = Phi^-1(p), 0 < p < 1: the rational approximation
-// A&S 26.2.23 refined by Halley steps on Phi(z) - p (full double accuracy).
+// Standard normal quantile z_p = Phi^-1(p), 0 < p < 1 (Boost.Math: -sqrt 2 erfc^-1(2p)).
 double normal_quantile(double p);
 
 // Chi-square distribution function with k > 0 degrees of freedom: F(x; k) = P(k/2, x/2).
