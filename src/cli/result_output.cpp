@@ -95,10 +95,9 @@ void write_result_json(JsonWriter& w, const RunRequest& req, const engine::Reali
     w.field("sweep", req.sweep);
     w.field("D_cm", req.D_cm);
     w.field("theta_deg", req.theta_deg);
-    for (const char* name :
-         {"seed", "particles", "wall_particles", "discharged", "n_jams", "n_shakes",
-          "n_jams_multi_shake", "survival_times", "censored", "jam_onsets", "shakes_per_jam",
-          "empty_time", "discharge_rate"})
+    for (const char* name : {"seed", "particles", "wall_particles", "discharged", "n_jams",
+                             "n_shakes", "n_jams_multi_shake", "survival_times", "censored",
+                             "jam_onsets", "shakes_per_jam", "empty_time", "discharge_rate"})
         member(name);
     // The engine reports 0 kg/s when it has no rate; say "no value" the same way as the rate.
     w.key("discharge_rate_kg_s");

@@ -57,8 +57,10 @@ void ByteReader::raise(const std::string& message) const {
 }
 
 void ByteReader::fail(const std::string& problem) const {
-    raise(what_ + ": " + problem + " (at byte " + std::to_string(pos_) + " of " +
-          std::to_string(in_.size()) + ")");
+    const std::string message = what_ + ": " + problem + " (at byte " + std::to_string(pos_) +
+                                " of " + std::to_string(in_.size()) + ")";
+    raise(message);
+    throw DecodeError(message);  // not reached: raise() throws
 }
 
 void ByteReader::need(std::size_t n) {

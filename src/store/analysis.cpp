@@ -67,8 +67,10 @@ void write_dataset(const h5::Id& loc, const DerivedDataset& d) {
     h5::hsize n = 0;
     std::visit([&](const auto& v) { n = v.size(); }, d.values);
     const h5::hsize chunk = std::clamp<h5::hsize>(n, 1, 4096);
-    const h5::hid f64_file = h5::file_type(h5::Scalar::f64), f64_mem = h5::mem_type(h5::Scalar::f64);
-    const h5::hid i64_file = h5::file_type(h5::Scalar::i64), i64_mem = h5::mem_type(h5::Scalar::i64);
+    const h5::hid f64_file = h5::file_type(h5::Scalar::f64),
+                  f64_mem = h5::mem_type(h5::Scalar::f64);
+    const h5::hid i64_file = h5::file_type(h5::Scalar::i64),
+                  i64_mem = h5::mem_type(h5::Scalar::i64);
     h5::Id ds;
     if (!d.shape.empty()) {  // fixed-size N-D array (numbers only: checked by validate())
         const std::vector<h5::hsize> dims(d.shape.begin(), d.shape.end());
@@ -168,8 +170,7 @@ void write_derived_group(const fs::path& store, const DerivedGroup& group) {
         h5::set_attr(file, "consistent", std::int64_t{0});
         h5::flush(file);
         if (h5::exists(file, group.name))
-            h5::remove(file, group.name,
-                             "cannot delete the previous group '/" + group.name + "'");
+            h5::remove(file, group.name, "cannot delete the previous group '/" + group.name + "'");
         write_group(file, group);
         h5::flush(file);
         h5::set_attr_u64(file, "journal_bytes", at);

@@ -151,21 +151,32 @@ using stored_t = typename Stored<T>::type;
 
 template <class T>
 constexpr Kind kind_of() {
-    if constexpr (std::is_same_v<T, engine::Status>) return Kind::status;
-    else if constexpr (std::is_same_v<T, engine::Event::Kind>) return Kind::event_kind;
-    else if constexpr (std::is_same_v<T, bool>) return Kind::boolean;
-    else if constexpr (std::is_same_v<T, int>) return Kind::i32;
-    else if constexpr (std::is_same_v<T, std::int64_t>) return Kind::i64;
-    else if constexpr (std::is_same_v<T, std::uint64_t>) return Kind::u64;
-    else if constexpr (std::is_same_v<T, double>) return Kind::f64;
-    else return Kind::str;
+    if constexpr (std::is_same_v<T, engine::Status>)
+        return Kind::status;
+    else if constexpr (std::is_same_v<T, engine::Event::Kind>)
+        return Kind::event_kind;
+    else if constexpr (std::is_same_v<T, bool>)
+        return Kind::boolean;
+    else if constexpr (std::is_same_v<T, int>)
+        return Kind::i32;
+    else if constexpr (std::is_same_v<T, std::int64_t>)
+        return Kind::i64;
+    else if constexpr (std::is_same_v<T, std::uint64_t>)
+        return Kind::u64;
+    else if constexpr (std::is_same_v<T, double>)
+        return Kind::f64;
+    else
+        return Kind::str;
 }
 
 template <class T>
 stored_t<T> to_stored(const T& v) {
-    if constexpr (std::is_same_v<T, double>) return fin(v);
-    else if constexpr (std::is_same_v<stored_t<T>, std::int8_t>) return static_cast<std::int8_t>(v);
-    else return v;
+    if constexpr (std::is_same_v<T, double>)
+        return fin(v);
+    else if constexpr (std::is_same_v<stored_t<T>, std::int8_t>)
+        return static_cast<std::int8_t>(v);
+    else
+        return v;
 }
 
 template <class T>
@@ -189,8 +200,12 @@ template <class E>
 constexpr bool is_vector<std::vector<E>> = true;
 
 // A member of the result itself, or of its diagnostics.
-constexpr auto whole = [](auto& r) -> auto& { return r; };
-constexpr auto diagnostics_of = [](auto& r) -> auto& { return r.diagnostics; };
+constexpr auto whole = [](auto& r) -> auto& {
+    return r;
+};
+constexpr auto diagnostics_of = [](auto& r) -> auto& {
+    return r.diagnostics;
+};
 
 // One value per row: /realizations/<name> or /realizations/diagnostics/<name>.
 template <class Owner, class M, class Access>

@@ -89,7 +89,7 @@ void write_fields(const h5::Id& parent, const std::string& scene, int point, std
     h5::set_attr(g, "wall_diameter", fin(m.wall_diameter));
 
     const std::vector<h5::hsize> dims = {static_cast<h5::hsize>(std::max(grid.ny, 0)),
-                                       static_cast<h5::hsize>(std::max(grid.nx, 0))};
+                                         static_cast<h5::hsize>(std::max(grid.nx, 0))};
     const std::size_t nodes = static_cast<std::size_t>(dims[0] * dims[1]);
     auto check_size = [&](std::size_t n, const std::string& what) {
         if (n != nodes)
@@ -106,8 +106,7 @@ void write_fields(const h5::Id& parent, const std::string& scene, int point, std
         check_size(v.size(), ds_name);
         std::vector<double> x(v.size());
         std::transform(v.begin(), v.end(), x.begin(), fin);
-        h5::Id d =
-            h5::write_array(g, ds_name, h5::file_type(h5::Scalar::f64), f64, x.data(), dims);
+        h5::Id d = h5::write_array(g, ds_name, h5::file_type(h5::Scalar::f64), f64, x.data(), dims);
         describe(d, units, description);
     };
     real("weight", m.weight, "1",

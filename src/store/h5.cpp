@@ -376,8 +376,8 @@ std::vector<std::string> member_names(const Id& group) {
                                                nullptr, 0, H5P_DEFAULT);
         check(static_cast<hid_t>(len), "cannot read a member name of a group");
         std::string s(static_cast<std::size_t>(len), '\0');
-        check(static_cast<hid_t>(H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC,
-                                                    i, s.data(), s.size() + 1, H5P_DEFAULT)),
+        check(static_cast<hid_t>(H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i,
+                                                    s.data(), s.size() + 1, H5P_DEFAULT)),
               "cannot read a member name of a group");
         out.push_back(s);
     }

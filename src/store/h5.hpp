@@ -14,7 +14,7 @@
 
 namespace hopper::store::h5 {
 
-using hid = std::int64_t;        // hid_t (static_assert in h5.cpp)
+using hid = std::int64_t;          // hid_t (static_assert in h5.cpp)
 using hsize = unsigned long long;  // hsize_t
 inline constexpr hid invalid_hid = -1;
 
@@ -71,7 +71,7 @@ Id create_group(const Id& loc, const std::string& name);
 Id open_group(const Id& loc, const std::string& name);
 bool exists(const Id& loc, const std::string& name);
 void remove(const Id& loc, const std::string& name, std::string_view what);  // unlinks
-std::vector<std::string> member_names(const Id& group);  // in name order
+std::vector<std::string> member_names(const Id& group);                      // in name order
 
 // Types. Numbers are little-endian in the file and native in memory.
 enum class Scalar { i8, i32, i64, u64, f64 };

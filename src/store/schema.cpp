@@ -134,7 +134,6 @@ double fin(double v) {
 
 // The small tables: /points, /tasks, /runs, /failures.
 
-
 const std::vector<TableColumn>& points_columns() {
     static const std::vector<TableColumn> c = {
         {"label", Kind::str, "", "the point's settings, e.g. 'D_cm=2.7 theta_deg=45' (identity)"},

@@ -87,12 +87,12 @@ struct Writer::Impl {
             describe(ds, d.units, d.description);
         }
         for (const RaggedFamily& f : families()) {
-            h5::Id s =
-                h5::create_column(g_real, std::string(f.name) + "_start", h5::file_type(h5::Scalar::i64), row_chunk);
+            h5::Id s = h5::create_column(g_real, std::string(f.name) + "_start",
+                                         h5::file_type(h5::Scalar::i64), row_chunk);
             describe(s, "1",
                      std::string("offset into /ragged of this realization's ") + f.description);
-            h5::Id l = h5::create_column(g_real, std::string(f.name) + "_length", h5::file_type(h5::Scalar::i32),
-                                         row_chunk);
+            h5::Id l = h5::create_column(g_real, std::string(f.name) + "_length",
+                                         h5::file_type(h5::Scalar::i32), row_chunk);
             describe(l, "1", std::string("number of ") + f.description);
         }
         auto table = [&](const char* name, const char* description,
@@ -232,7 +232,8 @@ struct Writer::Impl {
             h5::write_at(tasks.ds[3], types.task_state.get(), &state, at, 1, "/tasks/state");
             h5::write_at(tasks.ds[4], h5::mem_type(h5::Scalar::i64), &e.row, at, 1, "/tasks/row");
             const std::int32_t errors = e.errors;
-            h5::write_at(tasks.ds[5], h5::mem_type(h5::Scalar::i32), &errors, at, 1, "/tasks/errors");
+            h5::write_at(tasks.ds[5], h5::mem_type(h5::Scalar::i32), &errors, at, 1,
+                         "/tasks/errors");
         }
     }
 

@@ -41,7 +41,7 @@ struct Message {
     int attempt = 0;       // 1 for the first try
     int slot = 0;          // hybrid runs: the worker thread of a rank the message is for/from
     double seconds = 0.0;  // worker wall time of the task (result, interrupted, error)
-    core::Bytes payload;  // result: encode_result(); error: the message text
+    core::Bytes payload;   // result: encode_result(); error: the message text
 
     static Message make(MessageKind k, int task = -1, int attempt = 0) {
         Message m;

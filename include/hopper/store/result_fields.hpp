@@ -128,8 +128,7 @@ constexpr void for_each_result_field(V&& v) {
          Family::survival));
     v(in(field("jam_onsets", &R::jam_onsets, "s", "discharge time of each jam's onset"),
          Family::jam));
-    v(in(field("shakes_per_jam", &R::shakes_per_jam, "1", "shakes used on each jam"),
-         Family::jam));
+    v(in(field("shakes_per_jam", &R::shakes_per_jam, "1", "shakes used on each jam"), Family::jam));
     v(field("n_jams", &R::n_jams, "1", "jams"));
     v(field("n_shakes", &R::n_shakes, "1", "shakes"));
     v(field("n_jams_multi_shake", &R::n_jams_multi_shake, "1",
@@ -159,9 +158,9 @@ constexpr void for_each_result_field(V&& v) {
                      "when has_avalanche_sizes is false)"),
                Family::survival, "avalanche_size"),
             3));
-    v(placed(since(field("arches", &R::arches, "", "the arch that blocked the outlet at each jam"),
-                   3),
-             Placement::own));
+    v(placed(
+        since(field("arches", &R::arches, "", "the arch that blocked the outlet at each jam"), 3),
+        Placement::own));
 }
 
 }  // namespace hopper::store
