@@ -81,7 +81,9 @@ struct Members {
 }  // namespace
 
 bool is_wall_clock_key(std::string_view key) {
-    return key == "wall_seconds" || key == "ns_per_particle_step" || key.starts_with("seconds_");
+    bool wall_clock = false;
+    store::for_each_diagnostic([&](const auto& f) { wall_clock |= f.wall_clock && f.name == key; });
+    return wall_clock;
 }
 
 // The values come from the result's description (store/result_fields.hpp); what is written

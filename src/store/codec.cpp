@@ -361,9 +361,9 @@ engine::RealizationResult decode_result(std::span<const std::uint8_t> bytes,
 }
 
 engine::RealizationResult without_wall_clock(engine::RealizationResult r) {
-    auto& d = r.diagnostics;
-    d.wall_seconds = d.ns_per_particle_step = 0.0;
-    d.seconds_forces = d.seconds_integration = d.seconds_neighbors = d.seconds_observers = 0.0;
+    for_each_diagnostic([&r](const auto& f) {
+        if (f.wall_clock) r.diagnostics.*f.member = 0;
+    });
     return r;
 }
 

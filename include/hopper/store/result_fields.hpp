@@ -40,6 +40,7 @@ struct FieldDef {
     Family family = Family::none;
     std::string_view column = {};
     Placement placement = Placement::column;
+    bool wall_clock = false;  // a wall-clock measurement: differs between two runs of a realization
 
     std::string_view column_name() const { return column.empty() ? name : column; }
 };
@@ -64,6 +65,11 @@ constexpr FieldDef<Owner, Member> since(FieldDef<Owner, Member> f, std::uint16_t
     return f;
 }
 template <class Owner, class Member>
+constexpr FieldDef<Owner, Member> timed(FieldDef<Owner, Member> f) {
+    f.wall_clock = true;
+    return f;
+}
+template <class Owner, class Member>
 constexpr FieldDef<Owner, Member> placed(FieldDef<Owner, Member> f, Placement p) {
     f.placement = p;
     return f;
@@ -81,10 +87,10 @@ constexpr void for_each_diagnostic(V&& v) {
              Placement::nowhere));
     v(field("settle_time", &D::settle_time, "s", "simulated time spent settling"));
     v(field("shake_time", &D::shake_time, "s", "simulated time spent shaking"));
-    v(field("wall_seconds", &D::wall_seconds, "s",
-            "wall-clock time of the realization (not reproducible)"));
-    v(field("ns_per_particle_step", &D::ns_per_particle_step, "ns",
-            "wall-clock cost per particle and step"));
+    v(timed(field("wall_seconds", &D::wall_seconds, "s",
+                  "wall-clock time of the realization (not reproducible)")));
+    v(timed(field("ns_per_particle_step", &D::ns_per_particle_step, "ns",
+                  "wall-clock cost per particle and step")));
     v(field("max_overlap_ratio", &D::max_overlap_ratio, "d_small",
             "largest overlap seen / d_small"));
     v(field("settled_kinetic_energy", &D::settled_kinetic_energy, "J",
@@ -94,11 +100,13 @@ constexpr void for_each_diagnostic(V&& v) {
     v(field("dt", &D::dt, "s", "time step"));
     v(field("tau_c", &D::tau_c, "s", "contact duration used"));
     v(field("k_n", &D::k_n, "N/m", "normal spring constant"));
-    v(field("seconds_forces", &D::seconds_forces, "s", "wall-clock time in force loops"));
-    v(field("seconds_integration", &D::seconds_integration, "s", "wall-clock time integrating"));
-    v(field("seconds_neighbors", &D::seconds_neighbors, "s",
-            "wall-clock time in neighbour search"));
-    v(field("seconds_observers", &D::seconds_observers, "s", "wall-clock time in observers"));
+    v(timed(field("seconds_forces", &D::seconds_forces, "s", "wall-clock time in force loops")));
+    v(timed(
+        field("seconds_integration", &D::seconds_integration, "s", "wall-clock time integrating")));
+    v(timed(field("seconds_neighbors", &D::seconds_neighbors, "s",
+                  "wall-clock time in neighbour search")));
+    v(timed(
+        field("seconds_observers", &D::seconds_observers, "s", "wall-clock time in observers")));
 }
 
 // Calls v(def) for every member of an Event, in declaration order (the store's columns are
