@@ -6,8 +6,8 @@ namespace {
 constexpr std::uint32_t message_magic = 0x324D5748;  // "HWM2" (HWM1 had no slot)
 }
 
-store::Bytes encode(const Message& m) {
-    store::ByteWriter w;
+core::Bytes encode(const Message& m) {
+    core::ByteWriter w;
     w.u32(message_magic);
     w.u8(static_cast<std::uint8_t>(m.kind));
     w.i32(m.task);
@@ -20,7 +20,7 @@ store::Bytes encode(const Message& m) {
 }
 
 Message decode_message(std::span<const std::uint8_t> bytes) {
-    store::ByteReader in(bytes, "master/worker message");
+    core::ByteReader in(bytes, "master/worker message");
     if (in.u32() != message_magic) in.fail("not a master/worker message (bad magic)");
     Message m;
     const std::uint8_t kind = in.u8();

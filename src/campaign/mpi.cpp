@@ -56,14 +56,14 @@ bool probe(MPI_Comm comm, int source, MPI_Status& status) {
 Message receive_probed(MPI_Comm comm, const MPI_Status& status) {
     int count = 0;
     check(MPI_Get_count(&status, MPI_BYTE, &count), "MPI_Get_count");
-    store::Bytes buf(static_cast<std::size_t>(count));
+    core::Bytes buf(static_cast<std::size_t>(count));
     check(MPI_Recv(buf.data(), count, MPI_BYTE, status.MPI_SOURCE, tag, comm, MPI_STATUS_IGNORE),
           "MPI_Recv");
     return decode_message(buf);
 }
 
 void send_to(MPI_Comm comm, int dest, const Message& m) {
-    const store::Bytes b = encode(m);
+    const core::Bytes b = encode(m);
     check(MPI_Send(b.data(), static_cast<int>(b.size()), MPI_BYTE, dest, tag, comm), "MPI_Send");
 }
 

@@ -11,6 +11,8 @@
 #include <thread>
 #include <vector>
 
+#include "hopper/store/codec.hpp"
+
 namespace hopper::campaign {
 
 namespace {

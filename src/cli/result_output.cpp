@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <string_view>
 
+#include "hopper/store/result_fields.hpp"
+
 #ifndef HOPPER_VERSION
 #define HOPPER_VERSION "unknown"
 #endif
@@ -20,87 +22,101 @@ std::string num(double v, int precision = 6) {
     return buf;
 }
 
-void write_diagnostics(JsonWriter& w, const engine::Diagnostics& d) {
-    w.begin_object();
-    w.field("steps", d.steps);
-    w.field("settle_steps", d.settle_steps);
-    w.field("neighbor_rebuilds", d.neighbor_rebuilds);
-    w.field("particle_steps", d.particle_steps);
-    w.field("settle_time", d.settle_time);
-    w.field("shake_time", d.shake_time);
-    w.field("wall_seconds", d.wall_seconds);
-    w.field("ns_per_particle_step", d.ns_per_particle_step);
-    w.field("max_overlap_ratio", d.max_overlap_ratio);
-    w.field("settled_kinetic_energy", d.settled_kinetic_energy);
-    w.field("potential_energy_released", d.potential_energy_released);
-    w.field("dt", d.dt);
-    w.field("tau_c", d.tau_c);
-    w.field("k_n", d.k_n);
-    w.field("seconds_forces", d.seconds_forces);
-    w.field("seconds_integration", d.seconds_integration);
-    w.field("seconds_neighbors", d.seconds_neighbors);
-    w.field("seconds_observers", d.seconds_observers);
-    w.end_object();
-}
+// One member as JSON, by its C++ type: numbers, texts and optionals (null when absent) as
+// values, arrays on one line, the diagnostics as an object, the events as an array of one-line
+// objects, the fields as their one-line summary.
+struct JsonMember {
+    JsonWriter& w;
+
+    void operator()(std::string_view k, engine::Status v) { w.field(k, engine::to_string(v)); }
+    void operator()(std::string_view k, engine::Event::Kind v) { w.field(k, engine::to_string(v)); }
+    template <class T>
+    void operator()(std::string_view k, const std::vector<T>& v) {
+        w.field_array(k, v);
+    }
+    void operator()(std::string_view k, const engine::Diagnostics& d) {
+        w.key(k).begin_object();
+        store::for_each_diagnostic([&](const auto& f) { (*this)(f.name, d.*f.member); });
+        w.end_object();
+    }
+    void operator()(std::string_view k, const std::vector<engine::Event>& events) {
+        w.key(k).begin_array();
+        for (const auto& e : events) {
+            w.begin_object_inline();
+            store::for_each_event_field([&](const auto& f) { (*this)(f.name, e.*f.member); });
+            w.end_object();
+        }
+        w.end_array();
+    }
+    void operator()(std::string_view k, const std::optional<engine::FieldMoments>& m) {
+        if (!m) return;
+        w.key(k).begin_object_inline();
+        write_fields_summary(w, *m);
+        w.end_object();
+    }
+    void operator()(std::string_view, const std::vector<engine::Arch>&) {}  // not in this JSON
+    template <class T>
+    void operator()(std::string_view k, const T& v) {
+        w.field(k, v);
+    }
+};
+
+// The member `name` of the result (or of its diagnostics) under the key `key` (default: name).
+struct Members {
+    JsonWriter& w;
+    const engine::RealizationResult& r;
+
+    void operator()(std::string_view name, std::string_view key = {}) const {
+        store::for_each_result_field([&](const auto& f) {
+            if (f.name == name) JsonMember{w}(key.empty() ? name : key, r.*f.member);
+        });
+    }
+    void diagnostic(std::string_view name) const {
+        store::for_each_diagnostic([&](const auto& f) {
+            if (f.name == name) JsonMember{w}(name, r.diagnostics.*f.member);
+        });
+    }
+};
 
 }  // namespace
 
 bool is_wall_clock_key(std::string_view key) {
-    return key == "wall_seconds" || key == "ns_per_particle_step" || key.starts_with("seconds_");
+    bool wall_clock = false;
+    store::for_each_diagnostic([&](const auto& f) { wall_clock |= f.wall_clock && f.name == key; });
+    return wall_clock;
 }
 
+// The values come from the result's description (store/result_fields.hpp); what is written
+// here is the JSON's layout: its keys in their documented order (result_output.hpp).
 void write_result_json(JsonWriter& w, const RunRequest& req, const engine::RealizationResult& r) {
+    const Members member{w, r};
     w.begin_object();
-    w.field("status", engine::to_string(r.status));
-    w.field("message", r.message);
+    member("status");
+    member("message");
     w.field("version", HOPPER_VERSION);
     w.field("sweep", req.sweep);
     w.field("D_cm", req.D_cm);
     w.field("theta_deg", req.theta_deg);
-    w.field("seed", r.seed);
-    w.field("particles", r.particles);
-    w.field("wall_particles", r.wall_particles);
-    w.field("discharged", r.discharged);
-    w.field("n_jams", r.n_jams);
-    w.field("n_shakes", r.n_shakes);
-    w.field("n_jams_multi_shake", r.n_jams_multi_shake);
-    w.field_array("survival_times", r.survival_times);
-    w.field_array("censored", r.censored);
-    w.field_array("jam_onsets", r.jam_onsets);
-    w.field_array("shakes_per_jam", r.shakes_per_jam);
-    w.field("empty_time", r.empty_time);
-    w.field("discharge_rate", r.discharge_rate);
+    for (const char* name : {"seed", "particles", "wall_particles", "discharged", "n_jams",
+                             "n_shakes", "n_jams_multi_shake", "survival_times", "censored",
+                             "jam_onsets", "shakes_per_jam", "empty_time", "discharge_rate"})
+        member(name);
     // The engine reports 0 kg/s when it has no rate; say "no value" the same way as the rate.
     w.key("discharge_rate_kg_s");
     if (r.discharge_rate)
         w.value(r.discharge_rate_mass);
     else
         w.null();
-    w.field("steps", r.diagnostics.steps);
-    w.field("wall_seconds", r.diagnostics.wall_seconds);
-    w.field("ns_per_particle_step", r.diagnostics.ns_per_particle_step);
-    w.key("diagnostics");
-    write_diagnostics(w, r.diagnostics);
+    for (const char* name : {"steps", "wall_seconds", "ns_per_particle_step"})
+        member.diagnostic(name);
+    member("diagnostics");
     w.key("discharge_curve").begin_object();
-    w.field_array("time", r.curve_time);
-    w.field_array("in_hopper", r.curve_count);
+    member("curve_time", "time");
+    member("curve_count", "in_hopper");
     w.end_object();
-    w.field_array("exit_times", r.exit_times);
-    w.key("events").begin_array();
-    for (const auto& e : r.events) {
-        w.begin_object_inline();
-        w.field("kind", engine::to_string(e.kind));
-        w.field("time", e.time);
-        w.field("sim_time", e.sim_time);
-        w.field("in_hopper", e.in_hopper);
-        w.end_object();
-    }
-    w.end_array();
-    if (r.fields) {  // only when the scene samples fields: otherwise the output is unchanged
-        w.key("fields").begin_object_inline();
-        write_fields_summary(w, *r.fields);
-        w.end_object();
-    }
+    member("exit_times");
+    member("events");
+    member("fields");  // only when the scene samples fields: otherwise the output is unchanged
     w.end_object();
 }
 

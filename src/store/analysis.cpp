@@ -64,30 +64,32 @@ void validate(const DerivedGroup& g, const std::string& where) {
 
 void write_dataset(const h5::Id& loc, const DerivedDataset& d) {
     const std::string what = "derived dataset '" + d.name + "'";
-    hsize_t n = 0;
+    h5::hsize n = 0;
     std::visit([&](const auto& v) { n = v.size(); }, d.values);
-    const hsize_t chunk = std::clamp<hsize_t>(n, 1, 4096);
+    const h5::hsize chunk = std::clamp<h5::hsize>(n, 1, 4096);
+    const h5::hid f64_file = h5::file_type(h5::Scalar::f64),
+                  f64_mem = h5::mem_type(h5::Scalar::f64);
+    const h5::hid i64_file = h5::file_type(h5::Scalar::i64),
+                  i64_mem = h5::mem_type(h5::Scalar::i64);
     h5::Id ds;
     if (!d.shape.empty()) {  // fixed-size N-D array (numbers only: checked by validate())
-        const std::vector<hsize_t> dims(d.shape.begin(), d.shape.end());
+        const std::vector<h5::hsize> dims(d.shape.begin(), d.shape.end());
         if (const auto* dv = std::get_if<std::vector<double>>(&d.values)) {
-            ds = layout::write_array(loc, d.name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dv->data(),
-                                     dims);
+            ds = h5::write_array(loc, d.name, f64_file, f64_mem, dv->data(), dims);
         } else if (const auto* iv = std::get_if<std::vector<std::int64_t>>(&d.values)) {
-            ds =
-                layout::write_array(loc, d.name, H5T_STD_I64LE, H5T_NATIVE_INT64, iv->data(), dims);
+            ds = h5::write_array(loc, d.name, i64_file, i64_mem, iv->data(), dims);
         } else {
             const auto& bv = std::get<std::vector<bool>>(d.values);
             h5::Id type = h5::bool_type();
             std::vector<std::int8_t> b(bv.begin(), bv.end());
-            ds = layout::write_array(loc, d.name, type.get(), type.get(), b.data(), dims);
+            ds = h5::write_array(loc, d.name, type.get(), type.get(), b.data(), dims);
         }
     } else if (const auto* dv = std::get_if<std::vector<double>>(&d.values)) {
-        ds = h5::create_column(loc, d.name, H5T_IEEE_F64LE, chunk);
-        h5::write_all(ds, H5T_NATIVE_DOUBLE, dv->data(), n, what);
+        ds = h5::create_column(loc, d.name, f64_file, chunk);
+        h5::write_all(ds, f64_mem, dv->data(), n, what);
     } else if (const auto* iv = std::get_if<std::vector<std::int64_t>>(&d.values)) {
-        ds = h5::create_column(loc, d.name, H5T_STD_I64LE, chunk);
-        h5::write_all(ds, H5T_NATIVE_INT64, iv->data(), n, what);
+        ds = h5::create_column(loc, d.name, i64_file, chunk);
+        h5::write_all(ds, i64_mem, iv->data(), n, what);
     } else if (const auto* bv = std::get_if<std::vector<bool>>(&d.values)) {
         h5::Id type = h5::bool_type();
         ds = h5::create_column(loc, d.name, type.get(), chunk);
@@ -124,7 +126,7 @@ void write_group(const h5::Id& parent, const DerivedGroup& g) {
 
 void write_derived_group(const fs::path& store, const DerivedGroup& group) {
     validate(group, "/");
-    h5::quiet_errors();
+    const h5::QuietErrors quiet;
     // The journal's lock for the time of the change: no run writes the store meanwhile, and the
     // file's new checksum is recorded in a sync record of its own. A file system without locks
     // is accepted here (analysis does not race runs the way two runs race each other).
@@ -168,8 +170,7 @@ void write_derived_group(const fs::path& store, const DerivedGroup& group) {
         h5::set_attr(file, "consistent", std::int64_t{0});
         h5::flush(file);
         if (h5::exists(file, group.name))
-            h5::check_status(H5Ldelete(file.get(), group.name.c_str(), H5P_DEFAULT),
-                             "cannot delete the previous group '/" + group.name + "'");
+            h5::remove(file, group.name, "cannot delete the previous group '/" + group.name + "'");
         write_group(file, group);
         h5::flush(file);
         h5::set_attr_u64(file, "journal_bytes", at);
@@ -184,28 +185,15 @@ void write_derived_group(const fs::path& store, const DerivedGroup& group) {
 }
 
 std::vector<std::string> derived_group_members(const fs::path& store, const std::string& name) {
-    h5::quiet_errors();
+    const h5::QuietErrors quiet;
     h5::Id file = h5::open_file(store, false);
     std::vector<std::string> out;
     if (!h5::exists(file, name)) return out;
-    h5::Id g = h5::open_group(file, name);
-    H5G_info_t info;
-    h5::check_status(H5Gget_info(g.get(), &info), "cannot list '/" + name + "'");
-    for (hsize_t i = 0; i < info.nlinks; ++i) {
-        const ssize_t len = H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr,
-                                               0, H5P_DEFAULT);
-        h5::check(static_cast<hid_t>(len), "cannot read a member name of '/" + name + "'");
-        std::string s(static_cast<std::size_t>(len), '\0');
-        H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, s.data(), s.size() + 1,
-                           H5P_DEFAULT);
-        out.push_back(s);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
+    return h5::member_names(h5::open_group(file, name));
 }
 
 DerivedDataset read_derived_dataset(const fs::path& store, const std::string& path) {
-    h5::quiet_errors();
+    const h5::QuietErrors quiet;
     h5::Id file = h5::open_file(store, false);
     if (!h5::exists(file, path))
         throw core::StoreError("'" + store.string() + "' has no dataset '/" + path + "'");
@@ -214,26 +202,20 @@ DerivedDataset read_derived_dataset(const fs::path& store, const std::string& pa
     d.name = path.substr(path.rfind('/') == std::string::npos ? 0 : path.rfind('/') + 1);
     d.units = h5::get_string_attr(ds, "units").value_or("");
     d.description = h5::get_string_attr(ds, "description").value_or("");
-    const std::vector<hsize_t> dims = layout::dims_of(ds);
+    const std::vector<h5::hsize> dims = h5::dims_of(ds);
     d.shape.assign(dims.begin(), dims.end());
-    hsize_t n = 1;
-    for (hsize_t k : dims)
+    h5::hsize n = 1;
+    for (h5::hsize k : dims)
         n *= k;
-    h5::Id type(h5::check(H5Dget_type(ds.get()), "cannot read the type of '/" + path + "'"));
-    const H5T_class_t c = H5Tget_class(type.get());
-    const std::string what = "cannot read '/" + path + "'";
-    if (c == H5T_FLOAT) {
+    const h5::ValueClass c = h5::value_class(ds);
+    const std::string what = "'/" + path + "'";
+    if (c == h5::ValueClass::floating) {
         std::vector<double> v(n);
-        if (n > 0)
-            h5::check_status(
-                H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()),
-                what);
+        h5::read_array(ds, h5::mem_type(h5::Scalar::f64), v.data(), what);
         d.values = std::move(v);
-    } else if (c == H5T_INTEGER) {
+    } else if (c == h5::ValueClass::integer) {
         std::vector<std::int64_t> v(n);
-        if (n > 0)
-            h5::check_status(
-                H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), what);
+        h5::read_array(ds, h5::mem_type(h5::Scalar::i64), v.data(), what);
         d.values = std::move(v);
     } else {
         throw core::StoreError("'/" + path + "' in '" + store.string() + "' is not numeric");

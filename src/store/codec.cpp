@@ -4,152 +4,18 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "hopper/core/error.hpp"
+#include "hopper/store/result_fields.hpp"
 
 namespace hopper::store {
 
 static_assert(std::endian::native == std::endian::little ||
               std::endian::native == std::endian::big);
 
-void ByteWriter::u32(std::uint32_t v) {
-    for (int i = 0; i < 4; ++i)
-        out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
-
-void ByteWriter::u64(std::uint64_t v) {
-    for (int i = 0; i < 8; ++i)
-        out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
-
-void ByteWriter::f64(double v) {
-    u64(std::bit_cast<std::uint64_t>(v));
-}
-
-void ByteWriter::str(std::string_view s) {
-    u32(static_cast<std::uint32_t>(s.size()));
-    out_.insert(out_.end(), s.begin(), s.end());
-}
-
-void ByteWriter::f64s(const std::vector<double>& v) {
-    u32(static_cast<std::uint32_t>(v.size()));
-    for (double x : v)
-        f64(x);
-}
-
-void ByteWriter::i32s(const std::vector<int>& v) {
-    u32(static_cast<std::uint32_t>(v.size()));
-    for (int x : v)
-        i32(x);
-}
-
-void ByteWriter::i64s(const std::vector<std::int64_t>& v) {
-    u32(static_cast<std::uint32_t>(v.size()));
-    for (std::int64_t x : v)
-        i64(x);
-}
-
-void ByteWriter::bools(const std::vector<bool>& v) {
-    u32(static_cast<std::uint32_t>(v.size()));
-    for (bool x : v)
-        u8(x ? 1 : 0);
-}
-
-ByteReader::ByteReader(std::span<const std::uint8_t> in, std::string what)
-    : in_(in), what_(std::move(what)) {}
-
-void ByteReader::fail(const std::string& problem) const {
-    throw core::StoreError(what_ + ": " + problem + " (at byte " + std::to_string(pos_) + " of " +
-                           std::to_string(in_.size()) + ")");
-}
-
-void ByteReader::need(std::size_t n) {
-    if (n > remaining())
-        fail("truncated: " + std::to_string(n) + " more bytes needed, " +
-             std::to_string(remaining()) + " left");
-}
-
-std::uint8_t ByteReader::u8() {
-    need(1);
-    return in_[pos_++];
-}
-
-std::uint32_t ByteReader::u32() {
-    need(4);
-    std::uint32_t v = 0;
-    for (int i = 0; i < 4; ++i)
-        v |= static_cast<std::uint32_t>(in_[pos_++]) << (8 * i);
-    return v;
-}
-
-std::uint64_t ByteReader::u64() {
-    need(8);
-    std::uint64_t v = 0;
-    for (int i = 0; i < 8; ++i)
-        v |= static_cast<std::uint64_t>(in_[pos_++]) << (8 * i);
-    return v;
-}
-
-double ByteReader::f64() {
-    return std::bit_cast<double>(u64());
-}
-
-std::uint32_t ByteReader::count(std::size_t element_size) {
-    const std::uint32_t n = u32();
-    if (static_cast<std::uint64_t>(n) * element_size > remaining())
-        fail("a length of " + std::to_string(n) + " exceeds the " + std::to_string(remaining()) +
-             " bytes left");
-    return n;
-}
-
-std::string ByteReader::str() {
-    const std::uint32_t n = count(1);
-    std::string s(reinterpret_cast<const char*>(in_.data() + pos_), n);
-    pos_ += n;
-    return s;
-}
-
-std::span<const std::uint8_t> ByteReader::raw(std::size_t n) {
-    need(n);
-    auto s = in_.subspan(pos_, n);
-    pos_ += n;
-    return s;
-}
-
-std::vector<double> ByteReader::f64s() {
-    std::vector<double> v(count(8));
-    for (double& x : v)
-        x = f64();
-    return v;
-}
-
-std::vector<int> ByteReader::i32s() {
-    std::vector<int> v(count(4));
-    for (int& x : v)
-        x = i32();
-    return v;
-}
-
-std::vector<std::int64_t> ByteReader::i64s() {
-    std::vector<std::int64_t> v(count(8));
-    for (std::int64_t& x : v)
-        x = i64();
-    return v;
-}
-
-std::vector<bool> ByteReader::bools() {
-    const std::uint32_t n = count(1);
-    std::vector<bool> v(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-        const std::uint8_t b = u8();
-        if (b > 1) fail("a boolean byte holds " + std::to_string(b));
-        v[i] = b == 1;
-    }
-    return v;
-}
-
-void ByteReader::expect_end() const {
-    if (remaining() != 0) fail(std::to_string(remaining()) + " unexpected trailing bytes");
+void ByteReader::raise(const std::string& message) const {
+    throw core::StoreError(message);
 }
 
 namespace {
@@ -295,49 +161,159 @@ engine::FieldMoments decode_fields(ByteReader& in) {
     return m;
 }
 
-void encode_science(ByteWriter& w, const engine::RealizationResult& r) {
-    w.i32s(r.avalanche_sizes);
-    w.u32(static_cast<std::uint32_t>(r.arches.size()));
-    for (const engine::Arch& a : r.arches) {
-        w.i32s(a.ids);
-        w.f64s(a.x);
-        w.f64s(a.y);
-        w.f64(a.span);
-        w.f64(a.max_angle);
-    }
+void encode_arch(ByteWriter& w, const engine::Arch& a) {
+    w.i32s(a.ids);
+    w.f64s(a.x);
+    w.f64s(a.y);
+    w.f64(a.span);
+    w.f64(a.max_angle);
 }
 
-void decode_science(ByteReader& in, engine::RealizationResult& r) {
-    r.avalanche_sizes = in.i32s();
-    if (r.avalanche_sizes.size() != r.survival_times.size())
-        in.fail("avalanche sizes: " + std::to_string(r.avalanche_sizes.size()) + " values for " +
-                std::to_string(r.survival_times.size()) + " survival intervals");
-    for (int s : r.avalanche_sizes)
-        if (s < 0) in.fail("avalanche sizes: a negative size " + std::to_string(s));
-    const std::uint32_t n = in.u32();
-    if (n != r.jam_onsets.size())
-        in.fail("arches: " + std::to_string(n) + " arches for " +
-                std::to_string(r.jam_onsets.size()) + " jams");
-    r.arches.resize(n);
-    for (engine::Arch& a : r.arches) {
-        a.ids = in.i32s();
-        a.x = in.f64s();
-        a.y = in.f64s();
-        if (a.x.size() != a.ids.size() || a.y.size() != a.ids.size())
-            in.fail("arches: " + std::to_string(a.ids.size()) + " disk ids with " +
-                    std::to_string(a.x.size()) + " x and " + std::to_string(a.y.size()) +
-                    " y positions");
-        a.span = in.f64();
-        a.max_angle = in.f64();
-        for (double v : a.x)
-            if (!std::isfinite(v)) in.fail("arches: a non-finite position");
-        for (double v : a.y)
-            if (!std::isfinite(v)) in.fail("arches: a non-finite position");
-        if (!std::isfinite(a.span) || !std::isfinite(a.max_angle) || a.span < 0.0 ||
-            a.max_angle < 0.0)
-            in.fail("arches: a span or angle that is negative or not finite");
-    }
+void decode_arch(ByteReader& in, engine::Arch& a) {
+    a.ids = in.i32s();
+    a.x = in.f64s();
+    a.y = in.f64s();
+    if (a.x.size() != a.ids.size() || a.y.size() != a.ids.size())
+        in.fail("arches: " + std::to_string(a.ids.size()) + " disk ids with " +
+                std::to_string(a.x.size()) + " x and " + std::to_string(a.y.size()) +
+                " y positions");
+    a.span = in.f64();
+    a.max_angle = in.f64();
+    for (double v : a.x)
+        if (!std::isfinite(v)) in.fail("arches: a non-finite position");
+    for (double v : a.y)
+        if (!std::isfinite(v)) in.fail("arches: a non-finite position");
+    if (!std::isfinite(a.span) || !std::isfinite(a.max_angle) || a.span < 0.0 || a.max_angle < 0.0)
+        in.fail("arches: a span or angle that is negative or not finite");
 }
+
+// Bytes of one encoded event: the sum of its members' widths.
+constexpr std::uint64_t event_bytes = [] {
+    std::uint64_t n = 0;
+    for_each_event_field([&n](const auto& f) {
+        using M = std::remove_cvref_t<decltype(engine::Event{}.*f.member)>;
+        n += std::is_same_v<M, engine::Event::Kind> ? 1 : sizeof(M);
+    });
+    return n;
+}();
+static_assert(event_bytes == 21);
+
+// One member in the journal's encoding, chosen by its type. The result's version decides the
+// fields' framing (version 2: bare; version 3: a presence byte first).
+struct Encoder {
+    ByteWriter& w;
+    std::uint16_t version;
+
+    void put(engine::Status v) { w.u8(static_cast<std::uint8_t>(v)); }
+    void put(engine::Event::Kind v) { w.u8(static_cast<std::uint8_t>(v)); }
+    void put(const std::string& v) { w.str(v); }
+    void put(std::uint64_t v) { w.u64(v); }
+    void put(std::int64_t v) { w.i64(v); }
+    void put(int v) { w.i32(v); }
+    void put(double v) { w.f64(v); }
+    void put(const std::optional<double>& v) {
+        w.u8(v ? 1 : 0);
+        w.f64(v.value_or(0.0));
+    }
+    void put(const std::vector<double>& v) { w.f64s(v); }
+    void put(const std::vector<int>& v) { w.i32s(v); }
+    void put(const std::vector<bool>& v) { w.bools(v); }
+    void put(const std::vector<engine::Event>& v) {
+        w.u32(static_cast<std::uint32_t>(v.size()));
+        for (const engine::Event& e : v)
+            for_each_event_field([&](const auto& f) { put(e.*f.member); });
+    }
+    void put(const engine::Diagnostics& d) {
+        for_each_diagnostic([&](const auto& f) {
+            if (f.placement != Placement::nowhere) put(d.*f.member);
+        });
+    }
+    void put(const std::optional<engine::FieldMoments>& v) {
+        if (version == result_codec_version) {
+            w.u8(v ? 1 : 0);
+            if (v) encode_fields(w, *v);
+        } else if (v) {
+            encode_fields(w, *v);
+        }
+    }
+    void put(const std::vector<engine::Arch>& v) {
+        w.u32(static_cast<std::uint32_t>(v.size()));
+        for (const engine::Arch& a : v)
+            encode_arch(w, a);
+    }
+};
+
+// The inverse of Encoder, checking what it reads; `r` is the result read so far (the arrays
+// whose lengths follow another's are checked against it).
+struct Decoder {
+    ByteReader& in;
+    std::uint16_t version;
+    const engine::RealizationResult& r;
+
+    void get(engine::Status& v) {
+        const std::uint8_t status = in.u8();
+        if (status > static_cast<std::uint8_t>(engine::Status::failed))
+            in.fail("unknown status " + std::to_string(status));
+        v = static_cast<engine::Status>(status);
+    }
+    void get(engine::Event::Kind& v) {
+        const std::uint8_t kind = in.u8();
+        if (kind > static_cast<std::uint8_t>(engine::Event::Kind::stop))
+            in.fail("unknown event kind " + std::to_string(kind));
+        v = static_cast<engine::Event::Kind>(kind);
+    }
+    void get(std::string& v) { v = in.str(); }
+    void get(std::uint64_t& v) { v = in.u64(); }
+    void get(std::int64_t& v) { v = in.i64(); }
+    void get(int& v) { v = in.i32(); }
+    void get(double& v) { v = in.f64(); }
+    void get(std::optional<double>& v) {
+        const bool has = in.u8() != 0;
+        const double x = in.f64();
+        if (has) v = x;
+    }
+    void get(std::vector<double>& v) { v = in.f64s(); }
+    void get(std::vector<bool>& v) { v = in.bools(); }
+    void get(std::vector<int>& v) {
+        v = in.i32s();
+        if (&v != &r.avalanche_sizes) return;
+        if (v.size() != r.survival_times.size())
+            in.fail("avalanche sizes: " + std::to_string(v.size()) + " values for " +
+                    std::to_string(r.survival_times.size()) + " survival intervals");
+        for (int s : v)
+            if (s < 0) in.fail("avalanche sizes: a negative size " + std::to_string(s));
+    }
+    void get(std::vector<engine::Event>& v) {
+        const std::uint32_t n = in.u32();
+        if (static_cast<std::uint64_t>(n) * event_bytes > in.remaining())
+            in.fail("an event count of " + std::to_string(n) + " exceeds the bytes left");
+        v.resize(n);
+        for (engine::Event& e : v)
+            for_each_event_field([&](const auto& f) { get(e.*f.member); });
+    }
+    void get(engine::Diagnostics& d) {
+        for_each_diagnostic([&](const auto& f) {
+            if (f.placement != Placement::nowhere) get(d.*f.member);
+        });
+    }
+    void get(std::optional<engine::FieldMoments>& v) {
+        if (version == result_codec_version) {
+            const std::uint8_t has_fields = in.u8();
+            if (has_fields > 1) in.fail("a fields flag of " + std::to_string(has_fields));
+            if (!has_fields) return;
+        }
+        v = decode_fields(in);
+    }
+    void get(std::vector<engine::Arch>& v) {
+        const std::uint32_t n = in.u32();
+        if (n != r.jam_onsets.size())
+            in.fail("arches: " + std::to_string(n) + " arches for " +
+                    std::to_string(r.jam_onsets.size()) + " jams");
+        v.resize(n);
+        for (engine::Arch& a : v)
+            decode_arch(in, a);
+    }
+};
 
 }  // namespace
 
@@ -349,50 +325,10 @@ void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
     w.u32(result_magic);
     w.u8(static_cast<std::uint8_t>(version & 0xff));
     w.u8(static_cast<std::uint8_t>(version >> 8));
-    w.u8(static_cast<std::uint8_t>(r.status));
-    w.str(r.message);
-    w.u64(r.seed);
-    w.i32(r.particles);
-    w.i32(r.wall_particles);
-    w.f64s(r.survival_times);
-    w.bools(r.censored);
-    w.f64s(r.jam_onsets);
-    w.i32s(r.shakes_per_jam);
-    w.i32(r.n_jams);
-    w.i32(r.n_shakes);
-    w.i32(r.n_jams_multi_shake);
-    w.u8(r.empty_time ? 1 : 0);
-    w.f64(r.empty_time.value_or(0.0));
-    w.u8(r.discharge_rate ? 1 : 0);
-    w.f64(r.discharge_rate.value_or(0.0));
-    w.f64(r.discharge_rate_mass);
-    w.i32(r.discharged);
-    w.f64s(r.exit_times);
-    w.f64s(r.curve_time);
-    w.i32s(r.curve_count);
-    w.u32(static_cast<std::uint32_t>(r.events.size()));
-    for (const auto& e : r.events) {
-        w.u8(static_cast<std::uint8_t>(e.kind));
-        w.f64(e.time);
-        w.f64(e.sim_time);
-        w.i32(e.in_hopper);
-    }
-    const auto& d = r.diagnostics;
-    w.i64(d.steps);
-    w.i64(d.settle_steps);
-    w.i64(d.neighbor_rebuilds);
-    for (double v :
-         {d.settle_time, d.shake_time, d.wall_seconds, d.ns_per_particle_step, d.max_overlap_ratio,
-          d.settled_kinetic_energy, d.potential_energy_released, d.dt, d.tau_c, d.k_n,
-          d.seconds_forces, d.seconds_integration, d.seconds_neighbors, d.seconds_observers})
-        w.f64(v);
-    if (version == result_codec_version) {
-        w.u8(r.fields ? 1 : 0);
-        if (r.fields) encode_fields(w, *r.fields);
-        encode_science(w, r);
-    } else if (r.fields) {
-        encode_fields(w, *r.fields);
-    }
+    Encoder e{w, version};
+    for_each_result_field([&](const auto& f) {
+        if (f.since <= version) e.put(r.*f.member);
+    });
 }
 
 Bytes encode_result(const engine::RealizationResult& r) {
@@ -409,61 +345,10 @@ engine::RealizationResult decode_result(ByteReader& in) {
                 "build reads versions " + std::to_string(result_codec_version_without_fields) +
                 " to " + std::to_string(result_codec_version) + ")");
     engine::RealizationResult r;
-    const std::uint8_t status = in.u8();
-    if (status > static_cast<std::uint8_t>(engine::Status::failed))
-        in.fail("unknown status " + std::to_string(status));
-    r.status = static_cast<engine::Status>(status);
-    r.message = in.str();
-    r.seed = in.u64();
-    r.particles = in.i32();
-    r.wall_particles = in.i32();
-    r.survival_times = in.f64s();
-    r.censored = in.bools();
-    r.jam_onsets = in.f64s();
-    r.shakes_per_jam = in.i32s();
-    r.n_jams = in.i32();
-    r.n_shakes = in.i32();
-    r.n_jams_multi_shake = in.i32();
-    const bool has_empty = in.u8() != 0;
-    const double empty = in.f64();
-    if (has_empty) r.empty_time = empty;
-    const bool has_rate = in.u8() != 0;
-    const double rate = in.f64();
-    if (has_rate) r.discharge_rate = rate;
-    r.discharge_rate_mass = in.f64();
-    r.discharged = in.i32();
-    r.exit_times = in.f64s();
-    r.curve_time = in.f64s();
-    r.curve_count = in.i32s();
-    const std::uint32_t n_events = in.u32();
-    if (static_cast<std::uint64_t>(n_events) * 21 > in.remaining())
-        in.fail("an event count of " + std::to_string(n_events) + " exceeds the bytes left");
-    r.events.resize(n_events);
-    for (auto& e : r.events) {
-        const std::uint8_t kind = in.u8();
-        if (kind > static_cast<std::uint8_t>(engine::Event::Kind::stop))
-            in.fail("unknown event kind " + std::to_string(kind));
-        e.kind = static_cast<engine::Event::Kind>(kind);
-        e.time = in.f64();
-        e.sim_time = in.f64();
-        e.in_hopper = in.i32();
-    }
-    auto& d = r.diagnostics;
-    d.steps = in.i64();
-    d.settle_steps = in.i64();
-    d.neighbor_rebuilds = in.i64();
-    for (double* v : {&d.settle_time, &d.shake_time, &d.wall_seconds, &d.ns_per_particle_step,
-                      &d.max_overlap_ratio, &d.settled_kinetic_energy, &d.potential_energy_released,
-                      &d.dt, &d.tau_c, &d.k_n, &d.seconds_forces, &d.seconds_integration,
-                      &d.seconds_neighbors, &d.seconds_observers})
-        *v = in.f64();
-    if (version == result_codec_version_fields) r.fields = decode_fields(in);
-    if (version == result_codec_version) {
-        const std::uint8_t has_fields = in.u8();
-        if (has_fields > 1) in.fail("a fields flag of " + std::to_string(has_fields));
-        if (has_fields) r.fields = decode_fields(in);
-        decode_science(in, r);
-    }
+    Decoder d{in, version, r};
+    for_each_result_field([&](const auto& f) {
+        if (f.since <= version) d.get(r.*f.member);
+    });
     return r;
 }
 
@@ -476,9 +361,9 @@ engine::RealizationResult decode_result(std::span<const std::uint8_t> bytes,
 }
 
 engine::RealizationResult without_wall_clock(engine::RealizationResult r) {
-    auto& d = r.diagnostics;
-    d.wall_seconds = d.ns_per_particle_step = 0.0;
-    d.seconds_forces = d.seconds_integration = d.seconds_neighbors = d.seconds_observers = 0.0;
+    for_each_diagnostic([&r](const auto& f) {
+        if (f.wall_clock) r.diagnostics.*f.member = 0;
+    });
     return r;
 }
 

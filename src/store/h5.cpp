@@ -1,10 +1,22 @@
 #include "h5.hpp"
 
+#include <hdf5.h>
+
+#include <algorithm>
+#include <mutex>
+#include <type_traits>
+
 #include "hopper/core/error.hpp"
 
 namespace hopper::store::h5 {
 
+static_assert(std::is_same_v<hid, hid_t>);
+static_assert(std::is_same_v<hsize, hsize_t>);
+static_assert(invalid_hid == H5I_INVALID_HID);
+
 namespace {
+
+herr_t check_status(herr_t r, std::string_view what);
 
 herr_t collect_error(unsigned n, const H5E_error2_t* e, void* data) {
     auto* out = static_cast<std::vector<std::string>*>(data);
@@ -69,23 +81,55 @@ std::optional<T> get_numeric_attr(const Id& loc, const std::string& name, hid_t 
 
 }  // namespace
 
-void quiet_errors() {
+namespace {
+
+// The guards' shared state: how many live, and the printing they replaced.
+struct Quiet {
+    std::mutex mutex;
+    int depth = 0;
+    H5E_auto2_t func = nullptr;
+    void* data = nullptr;
+};
+
+Quiet& quiet() {
+    static Quiet q;
+    return q;
+}
+
+}  // namespace
+
+QuietErrors::QuietErrors() {
+    Quiet& q = quiet();
+    const std::lock_guard lock(q.mutex);
+    if (q.depth++ > 0) return;
     // No cleanup at exit: every file is closed explicitly, and HDF5 1.10's own cleanup crashes
     // (H5D_close) on a file whose writes failed, e.g. on a full disk (issue 14, item 2). Only
-    // effective before the library's first use, so this is the first call of every entry point.
+    // effective before the library's first use, so it comes before any other HDF5 call.
     H5dont_atexit();
+    H5Eget_auto2(H5E_DEFAULT, &q.func, &q.data);
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
 }
 
-hid_t check(hid_t r, std::string_view what) {
+QuietErrors::~QuietErrors() {
+    Quiet& q = quiet();
+    const std::lock_guard lock(q.mutex);
+    if (--q.depth > 0) return;
+    H5Eset_auto2(H5E_DEFAULT, q.func, q.data);
+    q.func = nullptr;
+    q.data = nullptr;
+}
+
+hid check(hid r, std::string_view what) {
     if (r < 0) fail(what);
     return r;
 }
 
+namespace {
 herr_t check_status(herr_t r, std::string_view what) {
     if (r < 0) fail(what);
     return r;
 }
+}  // namespace
 
 void Id::reset() noexcept {
     if (id_ >= 0 && H5Iis_valid(id_) > 0) H5Idec_ref(id_);
@@ -102,14 +146,12 @@ Id file_access() {
 }  // namespace
 
 Id create_file(const std::filesystem::path& path) {
-    quiet_errors();
     Id fapl = file_access();
     return make(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
                 "cannot create HDF5 file '" + path.string() + "'");
 }
 
 Id open_file(const std::filesystem::path& path, bool write) {
-    quiet_errors();
     Id fapl = file_access();
     return make(H5Fopen(path.c_str(), write ? H5F_ACC_RDWR : H5F_ACC_RDONLY, fapl.get()),
                 "cannot open HDF5 file '" + path.string() + "'");
@@ -125,7 +167,6 @@ void close_file(Id& file) {
 }
 
 bool is_hdf5(const std::filesystem::path& path) {
-    quiet_errors();
     const htri_t r = H5Fis_hdf5(path.c_str());
     if (r < 0) H5Eclear2(H5E_DEFAULT);
     return r > 0;
@@ -320,6 +361,144 @@ std::optional<std::int64_t> get_int_attr(const Id& loc, const std::string& name)
 
 std::optional<std::uint64_t> get_u64_attr(const Id& loc, const std::string& name) {
     return get_numeric_attr<std::uint64_t>(loc, name, H5T_NATIVE_UINT64);
+}
+
+void remove(const Id& loc, const std::string& name, std::string_view what) {
+    check_status(H5Ldelete(loc.get(), name.c_str(), H5P_DEFAULT), what);
+}
+
+std::vector<std::string> member_names(const Id& group) {
+    H5G_info_t info;
+    check_status(H5Gget_info(group.get(), &info), "cannot list a group");
+    std::vector<std::string> out;
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+        const ssize_t len = H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i,
+                                               nullptr, 0, H5P_DEFAULT);
+        check(static_cast<hid_t>(len), "cannot read a member name of a group");
+        std::string s(static_cast<std::size_t>(len), '\0');
+        check(static_cast<hid_t>(H5Lget_name_by_idx(group.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i,
+                                                    s.data(), s.size() + 1, H5P_DEFAULT)),
+              "cannot read a member name of a group");
+        out.push_back(s);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+hid file_type(Scalar s) {
+    switch (s) {
+        case Scalar::i8:
+            return H5T_STD_I8LE;
+        case Scalar::i32:
+            return H5T_STD_I32LE;
+        case Scalar::i64:
+            return H5T_STD_I64LE;
+        case Scalar::u64:
+            return H5T_STD_U64LE;
+        case Scalar::f64:
+            return H5T_IEEE_F64LE;
+    }
+    return H5T_IEEE_F64LE;
+}
+
+hid mem_type(Scalar s) {
+    switch (s) {
+        case Scalar::i8:
+            return H5T_NATIVE_INT8;
+        case Scalar::i32:
+            return H5T_NATIVE_INT32;
+        case Scalar::i64:
+            return H5T_NATIVE_INT64;
+        case Scalar::u64:
+            return H5T_NATIVE_UINT64;
+        case Scalar::f64:
+            return H5T_NATIVE_DOUBLE;
+    }
+    return H5T_NATIVE_DOUBLE;
+}
+
+ValueClass value_class(const Id& dataset) {
+    Id type = make(H5Dget_type(dataset.get()), "cannot read a dataset's type");
+    switch (H5Tget_class(type.get())) {
+        case H5T_INTEGER:
+            return ValueClass::integer;
+        case H5T_FLOAT:
+            return ValueClass::floating;
+        default:
+            return ValueClass::other;
+    }
+}
+
+void set_length(const Id& dataset, hsize n, std::string_view what) {
+    const hsize_t size[1] = {n};
+    check_status(H5Dset_extent(dataset.get(), size), "cannot resize " + std::string(what));
+}
+
+Id write_array(const Id& loc, const std::string& name, hid file_type, hid mem_type,
+               const void* data, const std::vector<hsize>& dims) {
+    const std::string what = "cannot write dataset '" + name + "'";
+    if (dims.empty()) throw core::StoreError(what + ": no dimensions");
+    hsize_t n = 1;
+    for (hsize_t d : dims)
+        n *= d;
+    Id space = make(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
+                    what + " (dataspace)");
+    Id dcpl = make(H5Pcreate(H5P_DATASET_CREATE), what + " (properties)");
+    if (n > 0) {
+        // Chunks of whole rows (the last dimension), about 1 MB each.
+        std::vector<hsize_t> chunk = dims;
+        const hsize_t row = std::max<hsize_t>(1, n / dims[0]);
+        chunk[0] = std::clamp<hsize_t>((1u << 17) / row, 1, dims[0]);
+        check_status(H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()),
+                     what + " (chunk)");
+        if (H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0) {
+            check_status(H5Pset_shuffle(dcpl.get()), what + " (shuffle)");
+            check_status(H5Pset_deflate(dcpl.get(), 1), what + " (deflate)");
+        }
+    }
+    Id ds = make(H5Dcreate2(loc.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT,
+                            dcpl.get(), H5P_DEFAULT),
+                 what);
+    if (n > 0)
+        check_status(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), what);
+    return ds;
+}
+
+std::vector<hsize> dims_of(const Id& dataset) {
+    Id space = make(H5Dget_space(dataset.get()), "cannot get a dataset's dataspace");
+    const int rank = static_cast<int>(
+        check(H5Sget_simple_extent_ndims(space.get()), "cannot get a dataset's rank"));
+    std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+    if (rank > 0)
+        check(H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr),
+              "cannot get a dataset's dimensions");
+    return dims;
+}
+
+void read_array(const Id& dataset, hid mem_type, void* data, std::string_view what) {
+    hsize_t n = 1;
+    for (hsize_t d : dims_of(dataset))
+        n *= d;
+    if (n == 0) return;
+    check_status(H5Dread(dataset.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
+                 "cannot read " + std::string(what));
+}
+
+std::optional<double> get_f64_attr(const Id& loc, const std::string& name) {
+    if (H5Aexists(loc.get(), name.c_str()) <= 0) {
+        H5Eclear2(H5E_DEFAULT);
+        return std::nullopt;
+    }
+    Id a(H5Aopen(loc.get(), name.c_str(), H5P_DEFAULT));
+    if (!a) return std::nullopt;
+    Id type(H5Aget_type(a.get()));
+    const H5T_class_t c = type ? H5Tget_class(type.get()) : H5T_NO_CLASS;
+    double v = 0.0;
+    if ((c != H5T_FLOAT && c != H5T_INTEGER) || H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0) {
+        H5Eclear2(H5E_DEFAULT);
+        return std::nullopt;
+    }
+    return v;
 }
 
 }  // namespace hopper::store::h5

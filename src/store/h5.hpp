@@ -1,9 +1,8 @@
 #pragma once
-// A thin RAII layer over the HDF5 C API (private to the store layer; the only place that
-// includes hdf5.h besides h5.cpp). Every call goes through check(), which turns a negative
-// return into core::StoreError carrying what was being done and HDF5's own error stack.
-
-#include <hdf5.h>
+// A thin RAII layer over the HDF5 C API, private to the store layer. h5.cpp is the only file
+// that includes <hdf5.h>: this header speaks in its own small types (hid, hsize, Scalar), so
+// nothing that includes it sees the C API. Every call is checked: a failure becomes
+// core::StoreError carrying what was being done and HDF5's own error stack.
 
 #include <cstdint>
 #include <filesystem>
@@ -15,37 +14,49 @@
 
 namespace hopper::store::h5 {
 
-// Switches off HDF5's automatic error printing (errors become exceptions instead) and its
-// cleanup at exit (which crashes after failed writes). Called before any other HDF5 call.
-void quiet_errors();
+using hid = std::int64_t;          // hid_t (static_assert in h5.cpp)
+using hsize = unsigned long long;  // hsize_t
+inline constexpr hid invalid_hid = -1;
+
+// While at least one QuietErrors lives, HDF5 prints no error stacks (check() puts them in the
+// exception instead). The first one also turns off HDF5's cleanup at exit, which crashes on a
+// file whose writes failed (issue 14; effective only before the library's first use, so every
+// entry point of the store makes one before its first HDF5 call). Guards nest and may end in
+// any order: the last one to end puts back the printing that was there before the first.
+class QuietErrors {
+  public:
+    QuietErrors();
+    ~QuietErrors();
+    QuietErrors(const QuietErrors&) = delete;
+    QuietErrors& operator=(const QuietErrors&) = delete;
+};
 
 // Throws core::StoreError("<what>: <HDF5 error stack>") when `r` is negative.
-hid_t check(hid_t r, std::string_view what);
-herr_t check_status(herr_t r, std::string_view what);
+hid check(hid r, std::string_view what);
 
 // An owned HDF5 identifier (file, group, dataset, dataspace, datatype, attribute, plist).
 class Id {
   public:
     Id() = default;
-    explicit Id(hid_t id) : id_(id) {}
-    Id(Id&& o) noexcept : id_(std::exchange(o.id_, H5I_INVALID_HID)) {}
+    explicit Id(hid id) : id_(id) {}
+    Id(Id&& o) noexcept : id_(std::exchange(o.id_, invalid_hid)) {}
     Id& operator=(Id&& o) noexcept {
         if (this != &o) {
             reset();
-            id_ = std::exchange(o.id_, H5I_INVALID_HID);
+            id_ = std::exchange(o.id_, invalid_hid);
         }
         return *this;
     }
     Id(const Id&) = delete;
     Id& operator=(const Id&) = delete;
     ~Id() { reset(); }
-    hid_t get() const { return id_; }
+    hid get() const { return id_; }
     explicit operator bool() const { return id_ >= 0; }
     void reset() noexcept;  // H5Idec_ref: closes whatever kind of object it is
-    hid_t release() noexcept { return std::exchange(id_, H5I_INVALID_HID); }
+    hid release() noexcept { return std::exchange(id_, invalid_hid); }
 
   private:
-    hid_t id_ = H5I_INVALID_HID;
+    hid id_ = invalid_hid;
 };
 
 // Files.
@@ -59,24 +70,41 @@ bool is_hdf5(const std::filesystem::path& path);
 Id create_group(const Id& loc, const std::string& name);
 Id open_group(const Id& loc, const std::string& name);
 bool exists(const Id& loc, const std::string& name);
+void remove(const Id& loc, const std::string& name, std::string_view what);  // unlinks
+std::vector<std::string> member_names(const Id& group);                      // in name order
 
-// Types (owned copies).
+// Types. Numbers are little-endian in the file and native in memory.
+enum class Scalar { i8, i32, i64, u64, f64 };
+hid file_type(Scalar s);
+hid mem_type(Scalar s);
 Id string_type();                                                       // variable-length UTF-8
 Id enum_type(const std::vector<std::pair<std::string, int>>& members);  // int8 base
 Id bool_type();  // enum {FALSE=0, TRUE=1}: h5py bool
+// What a dataset holds.
+enum class ValueClass { integer, floating, other };
+ValueClass value_class(const Id& dataset);
 
 // Extendible 1-D datasets ("columns"), chunked, shuffle + deflate.
-Id create_column(const Id& loc, const std::string& name, hid_t file_type, hsize_t chunk);
+Id create_column(const Id& loc, const std::string& name, hid file_type, hsize chunk);
 Id open_dataset(const Id& loc, const std::string& name);
-hsize_t length(const Id& dataset);
+hsize length(const Id& dataset);
+void set_length(const Id& dataset, hsize n, std::string_view what);
 // Writes n elements of memory type `mem_type` at [offset, offset + n), extending as needed.
-void write_at(const Id& dataset, hid_t mem_type, const void* data, hsize_t offset, hsize_t n,
+void write_at(const Id& dataset, hid mem_type, const void* data, hsize offset, hsize n,
               std::string_view what);
 // Sets the length to n and writes all of it.
-void write_all(const Id& dataset, hid_t mem_type, const void* data, hsize_t n,
-               std::string_view what);
-void read_all(const Id& dataset, hid_t mem_type, void* data, std::string_view what);
+void write_all(const Id& dataset, hid mem_type, const void* data, hsize n, std::string_view what);
+void read_all(const Id& dataset, hid mem_type, void* data, std::string_view what);
 std::vector<std::string> read_strings(const Id& dataset, std::string_view what);
+
+// Fixed-size N-D datasets (the field maps; also used by derived groups): `dims` row-major,
+// written whole, chunked (about 1 MB per chunk) with shuffle + deflate (unchunked when empty).
+Id write_array(const Id& loc, const std::string& name, hid file_type, hid mem_type,
+               const void* data, const std::vector<hsize>& dims);
+// The dimensions of a dataset, any rank.
+std::vector<hsize> dims_of(const Id& dataset);
+// Reads a whole dataset of any rank (nothing when it has no elements).
+void read_array(const Id& dataset, hid mem_type, void* data, std::string_view what);
 
 // Attributes (scalar). Replaces an existing attribute of the same name.
 void set_attr(const Id& loc, const std::string& name, const std::string& value);
@@ -86,5 +114,7 @@ void set_attr(const Id& loc, const std::string& name, double value);
 std::optional<std::string> get_string_attr(const Id& loc, const std::string& name);
 std::optional<std::int64_t> get_int_attr(const Id& loc, const std::string& name);
 std::optional<std::uint64_t> get_u64_attr(const Id& loc, const std::string& name);
+// A double attribute, absent when missing or not numeric.
+std::optional<double> get_f64_attr(const Id& loc, const std::string& name);
 
 }  // namespace hopper::store::h5

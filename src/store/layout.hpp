@@ -1,7 +1,8 @@
 #pragma once
 // The HDF5 layout of a store (private to the store layer): writing it from the journal's state
-// and reading realizations back. The layout is documented in the README ("Campaigns and the
-// store"); `format_version` changes whenever it changes incompatibly.
+// (writer.cpp) and reading realizations back (reader.cpp), both from the schema (schema.hpp).
+// The layout is documented in docs/store.md; `format_version` changes whenever it changes
+// incompatibly. No HDF5 type passes through this header.
 
 #include <cstdint>
 #include <filesystem>
@@ -10,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "h5.hpp"
 #include "state.hpp"
 
 namespace hopper::store::layout {
@@ -61,14 +61,5 @@ Inspection inspect(const std::filesystem::path& path);
 // Every stored realization, in row order, with its fields (/fields/<row>) when it has them.
 // Throws core::StoreError.
 std::vector<StoredRealization> read_realizations(const std::filesystem::path& path);
-
-// Fixed-size N-D datasets (the field maps; also used by derived groups): `dims` row-major,
-// written whole, chunked (about 1 MB per chunk) with shuffle + deflate (unchunked when empty).
-h5::Id write_array(const h5::Id& loc, const std::string& name, hid_t file_type, hid_t mem_type,
-                   const void* data, const std::vector<hsize_t>& dims);
-// The dimensions of a dataset, any rank.
-std::vector<hsize_t> dims_of(const h5::Id& dataset);
-// A double attribute, absent when missing or not numeric.
-std::optional<double> get_f64_attr(const h5::Id& loc, const std::string& name);
 
 }  // namespace hopper::store::layout

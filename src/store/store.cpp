@@ -76,6 +76,9 @@ struct RebuildSink : ReplaySink {
 }  // namespace
 
 struct Store::Impl {
+    // HDF5 prints no error stacks while a Store lives (its failures are exceptions); first, so
+    // that it outlives every HDF5 handle below.
+    h5::QuietErrors quiet;
     fs::path path;
     fs::path jpath;
     StoreOptions opt;
@@ -152,7 +155,6 @@ Store::Store(const fs::path& path, StoreOptions options) : impl_(std::make_uniqu
     m.path = path;
     m.jpath = journal_path(path);
     m.opt = std::move(options);
-    h5::quiet_errors();
     std::error_code ec;
     refuse_directory(path, "the store");
     refuse_directory(m.jpath, "the store's journal");
@@ -388,7 +390,7 @@ StoreStatus read_status(const fs::path& store) {
 }
 
 std::vector<StoredRealization> read_realizations(const fs::path& store) {
-    h5::quiet_errors();
+    const h5::QuietErrors quiet;
     return layout::read_realizations(store);
 }
 

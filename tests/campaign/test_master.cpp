@@ -178,10 +178,10 @@ TEST(Channel, MessagesRoundTripAndAreChecked) {
     EXPECT_EQ(back.seconds, 1.25);
     EXPECT_EQ(back.payload, m.payload);
     for (std::size_t n = 0; n < b.size(); ++n)
-        EXPECT_THROW(decode_message(std::span(b.data(), n)), core::StoreError);
+        EXPECT_THROW(decode_message(std::span(b.data(), n)), core::DecodeError);
     store::Bytes bad = b;
     bad[4] = 99;  // kind
-    EXPECT_THROW(decode_message(bad), core::StoreError);
+    EXPECT_THROW(decode_message(bad), core::DecodeError);
 }
 
 TEST(Master, EveryTaskIsStoredExactlyOnce) {

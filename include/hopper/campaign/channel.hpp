@@ -19,7 +19,7 @@
 #include <string>
 #include <utility>
 
-#include "hopper/store/codec.hpp"
+#include "hopper/core/bytes.hpp"
 
 namespace hopper::campaign {
 
@@ -41,7 +41,7 @@ struct Message {
     int attempt = 0;       // 1 for the first try
     int slot = 0;          // hybrid runs: the worker thread of a rank the message is for/from
     double seconds = 0.0;  // worker wall time of the task (result, interrupted, error)
-    store::Bytes payload;  // result: encode_result(); error: the message text
+    core::Bytes payload;   // result: encode_result(); error: the message text
 
     static Message make(MessageKind k, int task = -1, int attempt = 0) {
         Message m;
@@ -52,8 +52,8 @@ struct Message {
     }
 };
 
-// Versioned, checked wire format (core::StoreError when a message cannot be read).
-store::Bytes encode(const Message& m);
+// Versioned, checked wire format (core::DecodeError when a message cannot be read).
+core::Bytes encode(const Message& m);
 Message decode_message(std::span<const std::uint8_t> bytes);
 
 // The master's end. Workers are numbered 1..workers().

@@ -30,4 +30,11 @@ class StoreError : public Error {
     using Error::Error;
 };
 
+// Bytes that cannot be decoded: truncated, damaged, or not what they claim to be
+// (core::ByteReader; a layer may report the same failure as its own kind, see bytes.hpp).
+class DecodeError : public Error {
+  public:
+    using Error::Error;
+};
+
 }  // namespace hopper::core

@@ -29,85 +29,80 @@
 #include <utility>
 #include <vector>
 
+#include "hopper/core/bytes.hpp"
+
 namespace hopper::engine {
 
 inline constexpr std::uint32_t state_format_version = 1;
 
 // Little-endian byte buffer writer/reader for the state (fixed-width values, vectors as a
-// 64-bit count followed by the elements).
+// 64-bit count followed by the elements), on core::ByteWriter and core::ByteReader.
 class StateWriter {
   public:
     template <class T>
     void put(const T& v) {
         static_assert(std::is_trivially_copyable_v<T>);
-        const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
-        bytes_.insert(bytes_.end(), p, p + sizeof(T));
+        out_.raw({reinterpret_cast<const std::uint8_t*>(&v), sizeof(T)});
     }
     template <class T>
     void put_vector(const std::vector<T>& v) {
-        put<std::uint64_t>(v.size());
+        out_.u64(v.size());
         if constexpr (std::is_same_v<T, bool>) {
             for (bool b : v)
-                put<std::uint8_t>(b ? 1 : 0);
+                out_.u8(b ? 1 : 0);
         } else {
-            const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
-            bytes_.insert(bytes_.end(), p, p + v.size() * sizeof(T));
+            out_.raw({reinterpret_cast<const std::uint8_t*>(v.data()), v.size() * sizeof(T)});
         }
     }
     void put_string(std::string_view s) {
-        put<std::uint64_t>(s.size());
-        bytes_.insert(bytes_.end(), s.begin(), s.end());
+        out_.u64(s.size());
+        out_.raw({reinterpret_cast<const std::uint8_t*>(s.data()), s.size()});
     }
-    std::vector<std::uint8_t> take() { return std::move(bytes_); }
+    std::vector<std::uint8_t> take() { return out_.take(); }
 
   private:
-    std::vector<std::uint8_t> bytes_;
+    core::ByteWriter out_;
 };
 
 class StateReader {
   public:
-    explicit StateReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+    explicit StateReader(std::span<const std::uint8_t> bytes) : in_(bytes, "checkpoint") {}
     template <class T>
     T get() {
         static_assert(std::is_trivially_copyable_v<T>);
-        need(sizeof(T));
         T v;
-        std::memcpy(&v, bytes_.data() + pos_, sizeof(T));
-        pos_ += sizeof(T);
+        std::memcpy(&v, next(sizeof(T)).data(), sizeof(T));
         return v;
     }
     template <class T>
     void get_vector(std::vector<T>& v) {
         const auto n = get<std::uint64_t>();
         if constexpr (std::is_same_v<T, bool>) {
-            need(n);
+            const auto b = next(n);
             v.resize(n);
             for (std::uint64_t k = 0; k < n; ++k)
-                v[k] = bytes_[pos_ + k] != 0;
-            pos_ += n;
+                v[k] = b[k] != 0;
         } else {
-            if (n > (bytes_.size() - pos_) / sizeof(T)) fail();
+            if (n > in_.remaining() / sizeof(T)) fail();
+            const auto b = next(n * sizeof(T));
             v.resize(n);
-            if (n) std::memcpy(v.data(), bytes_.data() + pos_, n * sizeof(T));
-            pos_ += n * sizeof(T);
+            if (n) std::memcpy(v.data(), b.data(), n * sizeof(T));
         }
     }
     std::string get_string() {
-        const auto n = get<std::uint64_t>();
-        need(n);
-        std::string s(reinterpret_cast<const char*>(bytes_.data() + pos_), n);
-        pos_ += n;
-        return s;
+        const auto b = next(get<std::uint64_t>());
+        return {reinterpret_cast<const char*>(b.data()), b.size()};
     }
-    bool at_end() const { return pos_ == bytes_.size(); }
+    bool at_end() const { return in_.remaining() == 0; }
     [[noreturn]] static void fail();
 
   private:
-    void need(std::uint64_t n) const {
-        if (n > bytes_.size() - pos_) fail();
+    // The next n bytes; fail() (core::ConfigError) when fewer are left.
+    std::span<const std::uint8_t> next(std::uint64_t n) {
+        if (n > in_.remaining()) fail();
+        return in_.raw(static_cast<std::size_t>(n));
     }
-    std::span<const std::uint8_t> bytes_;
-    std::size_t pos_ = 0;
+    core::ByteReader in_;
 };
 
 class System;

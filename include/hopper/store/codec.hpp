@@ -1,6 +1,6 @@
 #pragma once
-// Bytes: a small checked binary codec (little-endian, fixed widths), the checksums the store
-// uses, and the versioned encoding of an engine::RealizationResult. The same bytes travel from
+// The checksums the store uses and the versioned encoding of an engine::RealizationResult, on
+// the byte writer and reader of core/bytes.hpp. The same bytes travel from
 // a worker to the master and sit in the store's journal, so a result is encoded exactly once.
 //
 // Decoding is checked: a truncated buffer, a count larger than the bytes left, trailing bytes,
@@ -12,65 +12,22 @@
 #include <string_view>
 #include <vector>
 
+#include "hopper/core/bytes.hpp"
 #include "hopper/engine/result.hpp"
 
 namespace hopper::store {
 
-using Bytes = std::vector<std::uint8_t>;
+using core::Bytes;
+using core::ByteWriter;
 
-class ByteWriter {
+// core::ByteReader whose failures are core::StoreError (a damaged journal record or checkpoint
+// file is a store that cannot be read).
+class ByteReader : public core::ByteReader {
   public:
-    void u8(std::uint8_t v) { out_.push_back(v); }
-    void u32(std::uint32_t v);
-    void u64(std::uint64_t v);
-    void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
-    void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
-    void f64(double v);  // the IEEE-754 bits, so every value round-trips exactly
-    void str(std::string_view s);
-    void raw(std::span<const std::uint8_t> b) { out_.insert(out_.end(), b.begin(), b.end()); }
-    void f64s(const std::vector<double>& v);
-    void i32s(const std::vector<int>& v);
-    void i64s(const std::vector<std::int64_t>& v);
-    void bools(const std::vector<bool>& v);
+    using core::ByteReader::ByteReader;
 
-    const Bytes& bytes() const { return out_; }
-    Bytes take() { return std::move(out_); }
-    std::size_t size() const { return out_.size(); }
-
-  private:
-    Bytes out_;
-};
-
-class ByteReader {
-  public:
-    // `what` names the data in error messages ("result record of task 3", ...).
-    ByteReader(std::span<const std::uint8_t> in, std::string what);
-
-    std::uint8_t u8();
-    std::uint32_t u32();
-    std::uint64_t u64();
-    std::int32_t i32() { return static_cast<std::int32_t>(u32()); }
-    std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
-    double f64();
-    std::string str();
-    std::span<const std::uint8_t> raw(std::size_t n);
-    std::vector<double> f64s();
-    std::vector<int> i32s();
-    std::vector<std::int64_t> i64s();
-    std::vector<bool> bools();
-
-    std::size_t remaining() const { return in_.size() - pos_; }
-    // Throws unless every byte was read.
-    void expect_end() const;
-    [[noreturn]] void fail(const std::string& problem) const;
-
-  private:
-    std::uint32_t count(std::size_t element_size);  // a length prefix, checked against the rest
-    void need(std::size_t n);
-
-    std::span<const std::uint8_t> in_;
-    std::size_t pos_ = 0;
-    std::string what_;
+  protected:
+    [[noreturn]] void raise(const std::string& message) const override;
 };
 
 // CRC-32C (Castagnoli, reflected polynomial 0x82F63B78), as used by iSCSI and ext4;
