@@ -53,8 +53,9 @@ std::map<std::string, std::string> parse_lines(const std::string& text) {
 }  // namespace
 
 std::string scene_text(const engine::SceneParams& p) {
-    // Keep in step with engine::SceneParams: test_plan checks sizeof(SceneParams) so that a new
-    // field cannot be forgotten here.
+    // Keep in step with engine::SceneParams (every field that changes the physics). The text is
+    // a fingerprint only: it is hashed and compared, never parsed back into values (the typed
+    // `parameters` of the plan are for that).
     Lines l;
     l.add("hopper.width_m", p.hopper.width);
     l.add("hopper.outlet_m", p.hopper.outlet);
@@ -148,6 +149,8 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
         p.D_cm = pt.scene.hopper.outlet / core::cm;
         p.theta_deg = pt.scene.hopper.theta / core::deg;
         p.particles = pt.scene.particles.count;
+        p.settings = pt.settings;
+        p.parameters = pt.parameters;
         for (int r = 0; r < pt.realizations; ++r)
             p.seeds.push_back(config::derive_seed(spec.seed, pt.settings, r));
         plan.points.push_back(std::move(p));
