@@ -8,6 +8,7 @@
 
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
+#include "hopper/store/store.hpp"
 
 namespace hopper::campaign {
 
@@ -156,6 +157,40 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
         plan.points.push_back(std::move(p));
     }
     return plan;
+}
+
+void restore_settings(store::CampaignPlan& plan, const std::vector<std::string>& sweep_texts) {
+    const auto missing = [](const store::PointPlan& p) {
+        return p.settings.empty() || p.parameters.empty();
+    };
+    if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
+    for (auto text = sweep_texts.rbegin(); text != sweep_texts.rend(); ++text) {
+        std::vector<config::Point> points;
+        try {
+            points = config::parse_sweep(*text, "<recorded sweep>").campaign.points;
+        } catch (const core::ConfigError&) {
+            continue;  // written for another version of the keys: no help
+        }
+        for (auto& p : plan.points) {
+            if (!missing(p)) continue;
+            for (const auto& q : points)
+                if (q.label == p.label && scene_text(q.scene) == p.scene) {
+                    p.settings = q.settings;
+                    p.parameters = q.parameters;
+                    break;
+                }
+        }
+        if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
+    }
+}
+
+store::CampaignPlan read_plan(const std::filesystem::path& store) {
+    store::StoreStatus status = store::read_status(store);
+    std::vector<std::string> texts;
+    for (const auto& r : status.runs)
+        texts.push_back(r.info.sweep_text);
+    restore_settings(status.plan, texts);
+    return std::move(status.plan);
 }
 
 std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
