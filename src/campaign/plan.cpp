@@ -8,7 +8,6 @@
 
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
-#include "hopper/store/store.hpp"
 
 namespace hopper::campaign {
 
@@ -159,15 +158,15 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
     return plan;
 }
 
-void restore_settings(store::CampaignPlan& plan, const std::vector<std::string>& sweep_texts) {
+void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSummary>& runs) {
     const auto missing = [](const store::PointPlan& p) {
         return p.settings.empty() || p.parameters.empty();
     };
     if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
-    for (auto text = sweep_texts.rbegin(); text != sweep_texts.rend(); ++text) {
+    for (auto run = runs.rbegin(); run != runs.rend(); ++run) {
         std::vector<config::Point> points;
         try {
-            points = config::parse_sweep(*text, "<recorded sweep>").campaign.points;
+            points = config::parse_sweep(run->info.sweep_text, "<recorded sweep>").campaign.points;
         } catch (const core::ConfigError&) {
             continue;  // written for another version of the keys: no help
         }
@@ -186,10 +185,7 @@ void restore_settings(store::CampaignPlan& plan, const std::vector<std::string>&
 
 store::CampaignPlan read_plan(const std::filesystem::path& store) {
     store::StoreStatus status = store::read_status(store);
-    std::vector<std::string> texts;
-    for (const auto& r : status.runs)
-        texts.push_back(r.info.sweep_text);
-    restore_settings(status.plan, texts);
+    restore_settings(status.plan, status.runs);
     return std::move(status.plan);
 }
 

@@ -310,9 +310,16 @@ bool canonical_less(std::string_view a, std::string_view b) {
 }
 
 std::string range_text(const KeyDef& d) {
-    std::string s = std::string(d.open_lo ? "(" : "[") + message_number(d.lo) + ", " +
-                    message_number(d.hi) + (d.open_hi ? ")" : "]");
-    if (!d.unit.empty()) s += " " + std::string(d.unit);
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on the one-expression form.
+    std::string s(d.open_lo ? "(" : "[");
+    s += message_number(d.lo);
+    s += ", ";
+    s += message_number(d.hi);
+    s += d.open_hi ? ")" : "]";
+    if (!d.unit.empty()) {
+        s += ' ';
+        s += d.unit;
+    }
     return s;
 }
 

@@ -10,6 +10,7 @@
 #include "hopper/config/sweep.hpp"
 #include "hopper/engine/params.hpp"
 #include "hopper/store/records.hpp"
+#include "hopper/store/store.hpp"
 
 namespace hopper::campaign {
 
@@ -22,10 +23,10 @@ std::string scene_text(const engine::SceneParams& p);
 store::CampaignPlan make_plan(const config::CampaignSpec& spec);
 
 // Gives the points recorded before typed settings existed (empty `settings`/`parameters`) theirs,
-// from the recorded sweep texts (newest first; RunInfo::sweep_text): a point takes them from the
-// first sweep whose campaign has a point of the same label and scene text. Sweep texts this
-// version cannot read are skipped; a point no sweep text explains keeps empty vectors.
-void restore_settings(store::CampaignPlan& plan, const std::vector<std::string>& sweep_texts);
+// from the sweep texts the runs recorded (newest first; RunInfo::sweep_text): a point takes them
+// from the first sweep whose campaign has a point of the same label and scene text. Sweep texts
+// this version cannot read are skipped; a point no sweep text explains keeps empty vectors.
+void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSummary>& runs);
 
 // The campaign plan of a store (the journal's, read without locks: store::read_status) with its
 // typed settings, restored for points recorded before them.
