@@ -150,20 +150,12 @@ std::optional<store::DerivedGroup> fields_group(const Analysis& a) {
 
 }  // namespace
 
-store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
-    store::DerivedGroup root;
-    root.name = "analysis";
-    root.attributes = {
-        {"description",
-         "derived by `campaign analyze` from the realizations (replaced on re-analysis; lost "
-         "when the file is rebuilt from the journal: run `campaign analyze` again)"},
-        {"created", store::utc_now()},
-        {"rho_b_source", a.rho_b_source},
-        {"d_definition", a.d_definition},
-        {"json", json}};
-    if (a.points.empty()) return root;
+namespace {
 
-    using I = std::int64_t;
+using I = std::int64_t;
+
+// /analysis/points (one row per point) and /analysis/km (the Kaplan–Meier curves it indexes).
+std::pair<store::DerivedGroup, store::DerivedGroup> points_and_km(const Analysis& a) {
     Columns c;
     c.text("label", "the point's settings", per_point(a, [](auto& p) { return p.label; }));
     c.text("group", "theta and other varied settings: the points of one fit",
@@ -290,6 +282,11 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
     km.datasets.push_back({"survival", "1", "S_KM(t_j)", std::move(ks)});
     km.datasets.push_back({"std_err", "1", "Greenwood standard error of S_KM(t_j)", std::move(ke)});
 
+    return {std::move(points), std::move(km)};
+}
+
+// /analysis/beverloo: one row per group.
+store::DerivedGroup beverloo_table(const Analysis& a) {
     Columns b;
     b.text("group", "theta and other varied settings",
            per_group(a, [](auto& g) { return g.group; }));
@@ -315,81 +312,95 @@ store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
                             std::move(b.ds),
                             {}};
 
-    // The columns every fit across D shares (jam rate, avalanche size): the group and its
-    // angle first, the verdict last; `fits` is the group's member holding the fits.
-    const auto head = [&](Columns& cols, auto fits) {
-        cols.text("group", "theta and other varied settings",
-                  per_group(a, [](auto& g) { return g.group; }));
-        cols.real("theta_deg", "deg", "wall angle",
-                  per_group(a, [](auto& g) { return g.theta_deg; }));
-        cols.integer("n_points", "outlets with jams",
-                     per_group(a, [&](auto& g) { return I((g.*fits).n_points); }));
-    };
-    const auto verdict = [&](Columns& cols, auto fits) {
-        cols.text("preferred", "exponential, power_law or undecided",
-                  per_group(a, [&](auto& g) { return (g.*fits).preferred; }));
-        cols.text("decision", "why", per_group(a, [&](auto& g) { return (g.*fits).decision; }));
-    };
-    using Group = std::decay_t<decltype(a.groups.front())>;
+    return bev;
+}
 
-    Columns j;
-    head(j, &Group::jam_rate);
+// One table of fits across D per group (jam rate, avalanche size): the group and its angle
+// first, then the columns `laws` adds (given per-group getters of the exponential and the
+// power-law fit, absent where the law is not valid), the verdict last.
+template <class Laws>
+store::DerivedGroup fits_table(const Analysis& a, stats::JamRateFits GroupAnalysis::*fits,
+                               const std::string& name, const std::string& description, Laws laws) {
+    Columns cols;
+    cols.text("group", "theta and other varied settings",
+              per_group(a, [](auto& g) { return g.group; }));
+    cols.real("theta_deg", "deg", "wall angle", per_group(a, [](auto& g) { return g.theta_deg; }));
+    cols.integer("n_points", "outlets with jams",
+                 per_group(a, [&](auto& g) { return I((g.*fits).n_points); }));
     const auto ex = [&](auto get) {
         return per_group(a, [&](auto& g) {
-            return when(g.jam_rate.exponential.valid, get(g.jam_rate.exponential));
+            const auto& f = (g.*fits).exponential;
+            return when(f.valid, get(f));
         });
     };
     const auto pw = [&](auto get) {
         return per_group(a, [&](auto& g) {
-            return when(g.jam_rate.power_law.valid, get(g.jam_rate.power_law));
+            const auto& f = (g.*fits).power_law;
+            return when(f.valid, get(f));
         });
     };
-    j.optional("exp_ln_A", "1", "exponential: ln(A / (1/s))", ex([](auto& f) { return f.ln_A; }));
-    j.optional("exp_B", "1/m", "exponential: B", ex([](auto& f) { return f.B; }));
-    j.optional("exp_B_err", "1/m", "exponential: s.e. of B", ex([](auto& f) { return f.B_err; }));
-    j.optional("exp_aic", "1", "exponential: AIC", ex([](auto& f) { return f.aic; }));
-    j.optional("pow_ln_A", "1", "power law: ln A", pw([](auto& f) { return f.ln_A; }));
-    j.optional("pow_gamma", "1", "power law: gamma", pw([](auto& f) { return f.gamma; }));
-    j.optional("pow_Dc", "m", "power law: critical outlet Dc", pw([](auto& f) { return f.Dc; }));
-    j.optional("pow_aic", "1", "power law: AIC", pw([](auto& f) { return f.aic; }));
-    verdict(j, &Group::jam_rate);
-    store::DerivedGroup jr{
-        "jam_rate", {{"description", "jam rate 1/tau versus D per group"}}, std::move(j.ds), {}};
+    laws(cols, ex, pw);
+    cols.text("preferred", "exponential, power_law or undecided",
+              per_group(a, [&](auto& g) { return (g.*fits).preferred; }));
+    cols.text("decision", "why", per_group(a, [&](auto& g) { return (g.*fits).decision; }));
+    return {name, {{"description", description}}, std::move(cols.ds), {}};
+}
 
+}  // namespace
+
+store::DerivedGroup analysis_group(const Analysis& a, const std::string& json) {
+    store::DerivedGroup root;
+    root.name = "analysis";
+    root.attributes = {
+        {"description",
+         "derived by `campaign analyze` from the realizations (replaced on re-analysis; lost "
+         "when the file is rebuilt from the journal: run `campaign analyze` again)"},
+        {"created", store::utc_now()},
+        {"rho_b_source", a.rho_b_source},
+        {"d_definition", a.d_definition},
+        {"json", json}};
+    if (a.points.empty()) return root;
+
+    auto [points, km] = points_and_km(a);
+    store::DerivedGroup jr = fits_table(
+        a, &GroupAnalysis::jam_rate, "jam_rate", "jam rate 1/tau versus D per group",
+        [](Columns& j, const auto& ex, const auto& pw) {
+            j.optional("exp_ln_A", "1", "exponential: ln(A / (1/s))",
+                       ex([](auto& f) { return f.ln_A; }));
+            j.optional("exp_B", "1/m", "exponential: B", ex([](auto& f) { return f.B; }));
+            j.optional("exp_B_err", "1/m", "exponential: s.e. of B",
+                       ex([](auto& f) { return f.B_err; }));
+            j.optional("exp_aic", "1", "exponential: AIC", ex([](auto& f) { return f.aic; }));
+            j.optional("pow_ln_A", "1", "power law: ln A", pw([](auto& f) { return f.ln_A; }));
+            j.optional("pow_gamma", "1", "power law: gamma", pw([](auto& f) { return f.gamma; }));
+            j.optional("pow_Dc", "m", "power law: critical outlet Dc",
+                       pw([](auto& f) { return f.Dc; }));
+            j.optional("pow_aic", "1", "power law: AIC", pw([](auto& f) { return f.aic; }));
+        });
     // <s>(D) per group: the fit of p = 1/<s>, written as <s> (ln_s0 = -ln A).
-    Columns v;
-    head(v, &Group::avalanche);
-    const auto vex = [&](auto get) {
-        return per_group(a, [&](auto& g) {
-            return when(g.avalanche.exponential.valid, get(g.avalanche.exponential));
+    store::DerivedGroup av = fits_table(
+        a, &GroupAnalysis::avalanche, "avalanche", "mean avalanche size <s> versus D per group",
+        [](Columns& v, const auto& ex, const auto& pw) {
+            v.optional("exp_ln_s0", "1", "exponential growth <s> = exp(ln_s0 + B D): ln_s0",
+                       ex([](auto& f) { return -f.ln_A; }));
+            v.optional("exp_B", "1/m", "exponential growth: B", ex([](auto& f) { return f.B; }));
+            v.optional("exp_B_err", "1/m", "exponential growth: s.e. of B",
+                       ex([](auto& f) { return f.B_err; }));
+            v.optional("exp_aic", "1", "exponential growth: AIC",
+                       ex([](auto& f) { return f.aic; }));
+            v.optional("pow_ln_s0", "1", "power law <s> = exp(ln_s0) (Dc - D)^-gamma: ln_s0",
+                       pw([](auto& f) { return -f.ln_A; }));
+            v.optional("pow_gamma", "1", "power law: gamma", pw([](auto& f) { return f.gamma; }));
+            v.optional("pow_gamma_err", "1", "power law: s.e. of gamma",
+                       pw([](auto& f) { return f.gamma_err; }));
+            v.optional("pow_Dc", "m", "power law: critical outlet Dc",
+                       pw([](auto& f) { return f.Dc; }));
+            v.optional("pow_Dc_err", "m", "power law: s.e. of Dc",
+                       pw([](auto& f) { return f.Dc_err; }));
+            v.optional("pow_aic", "1", "power law: AIC", pw([](auto& f) { return f.aic; }));
         });
-    };
-    const auto vpw = [&](auto get) {
-        return per_group(a, [&](auto& g) {
-            return when(g.avalanche.power_law.valid, get(g.avalanche.power_law));
-        });
-    };
-    v.optional("exp_ln_s0", "1", "exponential growth <s> = exp(ln_s0 + B D): ln_s0",
-               vex([](auto& f) { return -f.ln_A; }));
-    v.optional("exp_B", "1/m", "exponential growth: B", vex([](auto& f) { return f.B; }));
-    v.optional("exp_B_err", "1/m", "exponential growth: s.e. of B",
-               vex([](auto& f) { return f.B_err; }));
-    v.optional("exp_aic", "1", "exponential growth: AIC", vex([](auto& f) { return f.aic; }));
-    v.optional("pow_ln_s0", "1", "power law <s> = exp(ln_s0) (Dc - D)^-gamma: ln_s0",
-               vpw([](auto& f) { return -f.ln_A; }));
-    v.optional("pow_gamma", "1", "power law: gamma", vpw([](auto& f) { return f.gamma; }));
-    v.optional("pow_gamma_err", "1", "power law: s.e. of gamma",
-               vpw([](auto& f) { return f.gamma_err; }));
-    v.optional("pow_Dc", "m", "power law: critical outlet Dc", vpw([](auto& f) { return f.Dc; }));
-    v.optional("pow_Dc_err", "m", "power law: s.e. of Dc", vpw([](auto& f) { return f.Dc_err; }));
-    v.optional("pow_aic", "1", "power law: AIC", vpw([](auto& f) { return f.aic; }));
-    verdict(v, &Group::avalanche);
-    store::DerivedGroup av{"avalanche",
-                           {{"description", "mean avalanche size <s> versus D per group"}},
-                           std::move(v.ds),
-                           {}};
-
-    root.groups = {std::move(points), std::move(km), std::move(bev), std::move(jr), std::move(av)};
+    root.groups = {std::move(points), std::move(km), beverloo_table(a), std::move(jr),
+                   std::move(av)};
     if (auto f = fields_group(a)) root.groups.push_back(std::move(*f));
     return root;
 }

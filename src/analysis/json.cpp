@@ -58,6 +58,25 @@ Json setting_value(const core::Setting& s) {
     return std::get<std::string>(s.value);
 }
 
+// One law of fit_jam_rate: valid, then ln A (for avalanches ln_s0 = -ln A) and its error, the
+// law's own parameters (`own`), chi2, dof and aic; or valid = false and the reason.
+template <class Law, class Own>
+Json law_json(const Law& x, bool of_sizes, Own own) {
+    Json o;
+    o["valid"] = x.valid;
+    if (!x.valid) {
+        o["reason"] = x.reason;
+        return o;
+    }
+    o[of_sizes ? "ln_s0" : "ln_A"] = json_number((of_sizes ? -1.0 : 1.0) * x.ln_A);
+    o[of_sizes ? "ln_s0_err" : "ln_A_err"] = json_number(x.ln_A_err);
+    own(o);
+    o["chi2"] = json_number(x.chi2);
+    o["dof"] = x.dof;
+    o["aic"] = json_number(x.aic);
+    return o;
+}
+
 // The two laws of fit_jam_rate. For avalanches (of_sizes) the fit is of p = 1/<s>, written as
 // <s>: ln_s0 = -ln A, and exponential growth <s> = e^ln_s0 e^(B D), power-law divergence
 // <s> = e^ln_s0 (Dc - D)^-gamma (Zuriguel et al. 2005).
@@ -68,41 +87,18 @@ void add_rate_fits(Json& j, const stats::JamRateFits& f,
     for (const auto& [D, why] : left_out)
         out.push_back(Json{{"D_cm", json_number(D)}, {"reason", why}});
     j["left_out"] = std::move(out);
-    const char* lnA = of_sizes ? "ln_s0" : "ln_A";
-    const char* lnA_err = of_sizes ? "ln_s0_err" : "ln_A_err";
-    const double sign = of_sizes ? -1.0 : 1.0;
     const auto& x = f.exponential;
-    Json ex;
-    ex["valid"] = x.valid;
-    if (x.valid) {
-        ex[lnA] = json_number(sign * x.ln_A);
-        ex[lnA_err] = json_number(x.ln_A_err);
-        ex["B_per_m"] = json_number(x.B);
-        ex["B_err_per_m"] = json_number(x.B_err);
-        ex["chi2"] = json_number(x.chi2);
-        ex["dof"] = x.dof;
-        ex["aic"] = json_number(x.aic);
-    } else {
-        ex["reason"] = x.reason;
-    }
-    j["exponential"] = std::move(ex);
+    j["exponential"] = law_json(x, of_sizes, [&x](Json& o) {
+        o["B_per_m"] = json_number(x.B);
+        o["B_err_per_m"] = json_number(x.B_err);
+    });
     const auto& pl = f.power_law;
-    Json pw;
-    pw["valid"] = pl.valid;
-    if (pl.valid) {
-        pw[lnA] = json_number(sign * pl.ln_A);
-        pw[lnA_err] = json_number(pl.ln_A_err);
-        pw["gamma"] = json_number(pl.gamma);
-        pw["gamma_err"] = json_number(pl.gamma_err);
-        pw["Dc_m"] = json_number(pl.Dc);
-        pw["Dc_err_m"] = json_number(pl.Dc_err);
-        pw["chi2"] = json_number(pl.chi2);
-        pw["dof"] = pl.dof;
-        pw["aic"] = json_number(pl.aic);
-    } else {
-        pw["reason"] = pl.reason;
-    }
-    j["power_law"] = std::move(pw);
+    j["power_law"] = law_json(pl, of_sizes, [&pl](Json& o) {
+        o["gamma"] = json_number(pl.gamma);
+        o["gamma_err"] = json_number(pl.gamma_err);
+        o["Dc_m"] = json_number(pl.Dc);
+        o["Dc_err_m"] = json_number(pl.Dc_err);
+    });
     j["preferred"] = f.preferred;
     opt_field(j, "delta_aic", f.has_delta_aic ? std::optional<double>(f.delta_aic) : std::nullopt,
               f.decision);

@@ -4,7 +4,6 @@
 #include <charconv>
 #include <cmath>
 #include <map>
-#include <sstream>
 
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
@@ -40,14 +39,32 @@ class Lines {
     std::string text_;
 };
 
-std::map<std::string, std::string> parse_lines(const std::string& text) {
+// "name=value" texts of typed settings, by name.
+std::map<std::string, std::string> by_name(const std::vector<core::Setting>& settings) {
     std::map<std::string, std::string> m;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);) {
-        const auto eq = line.find('=');
-        if (eq != std::string::npos) m[line.substr(0, eq)] = line.substr(eq + 1);
+    for (const auto& s : settings) {
+        const std::string t = config::to_string(s);
+        m[s.name] = t.substr(s.name.size() + 1);
     }
     return m;
+}
+
+// The parameters in which two points of different physics differ, one "\n    name = value
+// (store: value)" line each.
+std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& stored) {
+    if (mine.parameters.empty() || stored.parameters.empty())
+        return "\n    (the physics text differs; the store's sweep file cannot be read back to "
+               "name the parameter)";
+    const auto a = by_name(mine.parameters), b = by_name(stored.parameters);
+    std::string diff;
+    for (const auto& [k, v] : a) {
+        const auto it = b.find(k);
+        const std::string old = it == b.end() ? "absent" : it->second;
+        if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
+    }
+    for (const auto& [k, v] : b)
+        if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+    return diff.empty() ? "\n    (the physics text differs in a value no sweep key sets)" : diff;
 }
 
 }  // namespace
@@ -213,17 +230,7 @@ std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
         }
         if (p.scene != s->scene) {
             ++changed;
-            const auto mine = parse_lines(p.scene);
-            const auto theirs = parse_lines(s->scene);
-            std::string diff;
-            for (const auto& [k, v] : mine) {
-                const auto it = theirs.find(k);
-                const std::string old = it == theirs.end() ? "absent" : it->second;
-                if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
-            }
-            for (const auto& [k, v] : theirs)
-                if (!mine.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
-            by_diff[diff].push_back(p.label);
+            by_diff[physics_diff(p, *s)].push_back(p.label);
             continue;
         }
         const std::size_t n = std::min(p.seeds.size(), s->seeds.size());

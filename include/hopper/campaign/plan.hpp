@@ -33,8 +33,10 @@ void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSum
 store::CampaignPlan read_plan(const std::filesystem::path& store);
 
 // Checks that `sweep` may run on a store holding `stored`: the same campaign seed, and for
-// every point already in the store the same physics and seeds. Throws core::ConfigError naming
-// what differs (point, parameter, both values). Returns notes on what the sweep adds.
+// every point already in the store the same physics and seeds (scene texts compared as
+// fingerprints). Throws core::ConfigError naming what differs (point, parameter under its
+// sweep-file name, both values: from the typed parameters, so `stored` should have been through
+// restore_settings). Returns notes on what the sweep adds.
 std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
                                           const store::CampaignPlan& sweep);
 
