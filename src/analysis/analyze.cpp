@@ -40,9 +40,7 @@ std::optional<double> number(const std::vector<core::Setting>& settings, std::st
 }
 
 std::string value_text(const core::Setting* s) {
-    if (!s) return "absent";
-    const std::string t = config::to_string(*s);
-    return t.substr(t.find('=') + 1);
+    return s ? config::value_text(*s) : "absent";
 }
 
 // it when the outlet was already jammed (onset to flow restart): the input of the early/late test.

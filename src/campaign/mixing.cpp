@@ -12,10 +12,8 @@ namespace {
 // Name -> value text ("0.5", "verlet"), as labels write them.
 std::map<std::string, std::string> values(const std::vector<core::Setting>& settings) {
     std::map<std::string, std::string> m;
-    for (const auto& s : settings) {
-        const std::string t = config::to_string(s);
-        m[s.name] = t.substr(s.name.size() + 1);
-    }
+    for (const auto& s : settings)
+        m[s.name] = config::value_text(s);
     return m;
 }
 

@@ -42,10 +42,8 @@ class Lines {
 // "name=value" texts of typed settings, by name.
 std::map<std::string, std::string> by_name(const std::vector<core::Setting>& settings) {
     std::map<std::string, std::string> m;
-    for (const auto& s : settings) {
-        const std::string t = config::to_string(s);
-        m[s.name] = t.substr(s.name.size() + 1);
-    }
+    for (const auto& s : settings)
+        m[s.name] = config::value_text(s);
     return m;
 }
 

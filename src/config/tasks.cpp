@@ -80,6 +80,10 @@ std::string to_string(const core::Setting& setting) {
     return setting.name + "=" + value_text(setting.value);
 }
 
+std::string value_text(const core::Setting& setting) {
+    return detail::value_text(setting.value);
+}
+
 std::vector<std::string> parameter_names() {
     std::vector<std::string> out;
     for (const auto& d : key_table())

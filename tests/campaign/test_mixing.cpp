@@ -14,8 +14,10 @@ using Settings = std::vector<core::Setting>;
 
 store::PointPlan point(const Settings& settings, Settings parameters) {
     store::PointPlan p;
-    for (const auto& s : settings)
-        p.label += (p.label.empty() ? "" : " ") + config::to_string(s);
+    for (const auto& s : settings) {
+        if (!p.label.empty()) p.label += ' ';
+        p.label += config::to_string(s);
+    }
     p.settings = settings;
     p.parameters = std::move(parameters);
     p.seeds = {1, 2};

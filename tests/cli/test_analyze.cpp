@@ -71,8 +71,10 @@ AnalysisPointInput point(double D, double theta, std::vector<RealizationResult> 
     };
     p.settings = {{"D_cm", written(D)}, {"theta_deg", written(theta)}};
     p.settings.insert(p.settings.end(), extra.begin(), extra.end());
-    for (const auto& s : p.settings)
-        p.label += (p.label.empty() ? "" : " ") + config::to_string(s);
+    for (const auto& s : p.settings) {
+        if (!p.label.empty()) p.label += ' ';
+        p.label += config::to_string(s);
+    }
     p.parameters = parameters();
     p.D_cm = D;
     p.theta_deg = theta;

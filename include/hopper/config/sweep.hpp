@@ -104,6 +104,8 @@ std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<core::S
 // (std::to_chars), strings verbatim, e.g. "D_cm=2.7", "integrator.scheme=verlet". Labels and
 // seeds are built from it.
 std::string to_string(const core::Setting& setting);
+// Its value alone, as labels write it ("2.7", "verlet").
+std::string value_text(const core::Setting& setting);
 
 // The canonical names of every scene parameter a [sweep] or [[points]] entry may set, in the
 // order of campaigns/README.md: "D_cm", "theta_deg", then "<section>.<key>" ("hopper.width_cm",
