@@ -273,6 +273,169 @@ AvalancheAnalysis analyze_avalanches(const AnalysisPointInput& in) {
 
 }  // namespace
 
+namespace {
+
+// One point's statistics; `hidden` is what hidden_settings() adds to its group ("" mostly).
+PointAnalysis analyze_point(const AnalysisPointInput& in, const std::string& hidden) {
+    PointAnalysis p;
+    p.label = in.label;
+    // The settings as the user wrote them (the plan's SI round trip gave 59.99999999999999).
+    p.D_cm = number(in.settings, "D_cm").value_or(in.D_cm);
+    p.theta_deg = number(in.settings, "theta_deg").value_or(in.theta_deg);
+    std::string group = "theta_deg=" + number_text(p.theta_deg);
+    group += hidden;
+    p.planned = in.planned;
+    p.stored = static_cast<int>(in.results.size());
+    for (const auto& s : in.settings) {
+        if (s.name == "D_cm" || s.name == "theta_deg") continue;
+        p.varied.push_back(s);
+        group += " " + config::to_string(s);
+    }
+    p.group = group;
+    const auto parameter = [&](const char* name) {
+        return number(in.parameters, name).value_or(0.0);
+    };
+    const double density = parameter("hopper.density_kg_m3");
+    const double thickness = parameter("hopper.thickness_cm") * cm;
+    const double fs = parameter("hopper.small_fraction");
+    const double ds = parameter("hopper.d_small_cm") * cm;
+    const double dl = parameter("hopper.d_large_cm") * cm;
+    p.rho_b = kAssumedPackingFraction * density * thickness;
+    p.d_mean = fs * ds + (1.0 - fs) * dl;
+
+    std::vector<double> t, windows, empty, rate, rate_kg;
+    std::vector<bool> censored;
+    std::vector<stats::JamHistory> histories;
+    for (const auto& r : in.results) {
+        switch (r.status) {
+            case engine::Status::complete:
+                ++p.n_complete;
+                break;
+            case engine::Status::failed:
+                ++p.n_failed;
+                break;
+            case engine::Status::arrested:
+                ++p.n_arrested;
+                break;
+            case engine::Status::time_limit:
+                ++p.n_time_limit;
+                break;
+        }
+        if (r.status == engine::Status::failed) continue;
+        ++p.used;
+        p.n_jams += r.n_jams;
+        p.n_shakes += r.n_shakes;
+        p.n_jams_multi_shake += r.n_jams_multi_shake;
+        double w = 0.0;
+        for (std::size_t i = 0; i < r.survival_times.size(); ++i) {
+            t.push_back(r.survival_times[i]);
+            censored.push_back(i < r.censored.size() && r.censored[i]);
+            w += r.survival_times[i];
+        }
+        if (!r.survival_times.empty()) windows.push_back(w);
+        if (auto h = jam_history(r)) histories.push_back(std::move(*h));
+        if (r.empty_time) empty.push_back(*r.empty_time);
+        if (r.discharge_rate) {
+            rate.push_back(*r.discharge_rate);
+            rate_kg.push_back(r.discharge_rate_mass);
+        }
+    }
+    if (t.empty()) {
+        p.fit_reason = p.used == 0 ? "no realizations without failure" : "no survival intervals";
+        p.gof.reason = p.fit_reason;
+        p.line.reason = p.fit_reason;
+    } else {
+        p.fit = stats::fit_censored_exponential(t, censored);
+        if (!p.fit->tau) p.fit_reason = "no jams";
+        stats::GofOptions go;
+        go.seed = store::fnv1a64(in.label) ^ 0x9e3779b97f4a7c15ULL;  // from the point
+        p.gof = stats::ks_exponential_censored(t, censored, windows, go);
+        p.line = stats::log_survival_line(t, censored);
+        p.km = stats::kaplan_meier(t, censored);
+    }
+    if (histories.empty())
+        p.early_late.reason = "no realization with discharge time";
+    else
+        p.early_late = stats::early_late_rate_test(histories);
+    p.empty_time = stats::summarize(empty);
+    if (empty.empty()) p.empty_time.reason = "no realization emptied";
+    p.rate = stats::summarize(rate);
+    p.rate_kg = stats::summarize(rate_kg);
+    if (rate.empty()) p.rate.reason = p.rate_kg.reason = "no realization has a discharge rate";
+    p.avalanche = analyze_avalanches(in);
+    try {
+        p.fields = merge_point_fields(in);
+    } catch (const core::StoreError& e) {
+        p.fields = PointFields{};
+        p.fields.enabled = true;
+        p.fields.error = true;
+        p.fields.reason = e.what();
+    }
+
+    return p;
+}
+
+// The fits across D of one group (its points sorted by D here): Beverloo, jam rate, <s>.
+void fit_group(GroupAnalysis& g, const std::vector<PointAnalysis>& points) {
+    std::sort(g.points.begin(), g.points.end(), [&](int x, int y) {
+        return points[static_cast<std::size_t>(x)].D_cm < points[static_cast<std::size_t>(y)].D_cm;
+    });
+    // Beverloo: mean mass flow rate per outlet, weighted by its standard error when every
+    // point has one (relative weights; the covariance is scaled by the residual variance).
+    std::vector<double> D, W, sW;
+    bool all_se = true;
+    double rho_b = 0.0, d = 0.0;
+    for (int i : g.points) {
+        const auto& p = points[static_cast<std::size_t>(i)];
+        rho_b = p.rho_b;
+        d = p.d_mean;
+        if (!p.rate_kg.mean || !(*p.rate_kg.mean > 0.0)) continue;
+        D.push_back(p.D_cm * cm);
+        W.push_back(*p.rate_kg.mean);
+        if (p.rate_kg.std_err && *p.rate_kg.std_err > 0.0)
+            sW.push_back(*p.rate_kg.std_err);
+        else
+            all_se = false;
+    }
+    if (!all_se) sW.clear();
+    if (rho_b > 0.0 && d > 0.0) {
+        g.beverloo = stats::fit_beverloo(D, W, sW, rho_b, d);
+    } else {
+        g.beverloo.reason = "the scene lacks the density, thickness or diameters";
+        g.beverloo.n_points = static_cast<int>(D.size());
+    }
+    // Jam rate 1/tau versus D: points without a jam have no rate and are left out.
+    std::vector<double> Dj, rate, sigma;
+    for (int i : g.points) {
+        const auto& p = points[static_cast<std::size_t>(i)];
+        if (p.fit && p.fit->tau && p.fit->sigma_log_tau) {
+            Dj.push_back(p.D_cm * cm);
+            rate.push_back(1.0 / *p.fit->tau);
+            sigma.push_back(*p.fit->sigma_log_tau);
+        } else {
+            g.jam_rate_left_out.emplace_back(p.D_cm,
+                                             p.fit_reason.empty() ? "no jams" : p.fit_reason);
+        }
+    }
+    g.jam_rate = stats::fit_jam_rate(Dj, rate, sigma);
+    // <s>(D) through p = 1/<s>, sigma(ln p) = 1/sqrt(r) as for the jam rate.
+    std::vector<double> Ds, ps, ss;
+    for (int i : g.points) {
+        const auto& av = points[static_cast<std::size_t>(i)].avalanche;
+        if (av.fit && av.fit->tau && av.fit->sigma_log_tau) {
+            Ds.push_back(points[static_cast<std::size_t>(i)].D_cm * cm);
+            ps.push_back(1.0 / *av.fit->tau);
+            ss.push_back(*av.fit->sigma_log_tau);
+        } else {
+            g.avalanche_left_out.emplace_back(points[static_cast<std::size_t>(i)].D_cm,
+                                              av.reason.empty() ? "no jams" : av.reason);
+        }
+    }
+    g.avalanche = stats::fit_jam_rate(Ds, ps, ss);
+}
+
+}  // namespace
+
 Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
     Analysis a;
     a.rho_b_source = "estimate: rho_b = " + number_text(kAssumedPackingFraction) +
@@ -288,102 +451,11 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
         std::optional<AnalysisPointInput> reordered;
         if (out_of_realization_order(given)) reordered = in_realization_order(given);
         const AnalysisPointInput& in = reordered ? *reordered : given;
-        PointAnalysis p;
-        p.label = in.label;
-        // The settings as the user wrote them (the plan's SI round trip gave 59.99999999999999).
-        p.D_cm = number(in.settings, "D_cm").value_or(in.D_cm);
-        p.theta_deg = number(in.settings, "theta_deg").value_or(in.theta_deg);
-        std::string group = "theta_deg=" + number_text(p.theta_deg);
-        if (const auto it = hidden.find(in.label); it != hidden.end()) group += it->second;
-        p.planned = in.planned;
-        p.stored = static_cast<int>(in.results.size());
-        for (const auto& s : in.settings) {
-            if (s.name == "D_cm" || s.name == "theta_deg") continue;
-            p.varied.push_back(s);
-            group += " " + config::to_string(s);
-        }
-        p.group = group;
-        const auto parameter = [&](const char* name) {
-            return number(in.parameters, name).value_or(0.0);
-        };
-        const double density = parameter("hopper.density_kg_m3");
-        const double thickness = parameter("hopper.thickness_cm") * cm;
-        const double fs = parameter("hopper.small_fraction");
-        const double ds = parameter("hopper.d_small_cm") * cm;
-        const double dl = parameter("hopper.d_large_cm") * cm;
-        p.rho_b = kAssumedPackingFraction * density * thickness;
-        p.d_mean = fs * ds + (1.0 - fs) * dl;
-
-        std::vector<double> t, windows, empty, rate, rate_kg;
-        std::vector<bool> censored;
-        std::vector<stats::JamHistory> histories;
-        for (const auto& r : in.results) {
-            switch (r.status) {
-                case engine::Status::complete:
-                    ++p.n_complete;
-                    break;
-                case engine::Status::failed:
-                    ++p.n_failed;
-                    break;
-                case engine::Status::arrested:
-                    ++p.n_arrested;
-                    break;
-                case engine::Status::time_limit:
-                    ++p.n_time_limit;
-                    break;
-            }
-            if (r.status == engine::Status::failed) continue;
-            ++p.used;
-            p.n_jams += r.n_jams;
-            p.n_shakes += r.n_shakes;
-            p.n_jams_multi_shake += r.n_jams_multi_shake;
-            double w = 0.0;
-            for (std::size_t i = 0; i < r.survival_times.size(); ++i) {
-                t.push_back(r.survival_times[i]);
-                censored.push_back(i < r.censored.size() && r.censored[i]);
-                w += r.survival_times[i];
-            }
-            if (!r.survival_times.empty()) windows.push_back(w);
-            if (auto h = jam_history(r)) histories.push_back(std::move(*h));
-            if (r.empty_time) empty.push_back(*r.empty_time);
-            if (r.discharge_rate) {
-                rate.push_back(*r.discharge_rate);
-                rate_kg.push_back(r.discharge_rate_mass);
-            }
-        }
-        if (t.empty()) {
-            p.fit_reason =
-                p.used == 0 ? "no realizations without failure" : "no survival intervals";
-            p.gof.reason = p.fit_reason;
-            p.line.reason = p.fit_reason;
-        } else {
-            p.fit = stats::fit_censored_exponential(t, censored);
-            if (!p.fit->tau) p.fit_reason = "no jams";
-            stats::GofOptions go;
-            go.seed = store::fnv1a64(in.label) ^ 0x9e3779b97f4a7c15ULL;  // from the point
-            p.gof = stats::ks_exponential_censored(t, censored, windows, go);
-            p.line = stats::log_survival_line(t, censored);
-            p.km = stats::kaplan_meier(t, censored);
-        }
-        if (histories.empty())
-            p.early_late.reason = "no realization with discharge time";
-        else
-            p.early_late = stats::early_late_rate_test(histories);
-        p.empty_time = stats::summarize(empty);
-        if (empty.empty()) p.empty_time.reason = "no realization emptied";
-        p.rate = stats::summarize(rate);
-        p.rate_kg = stats::summarize(rate_kg);
-        if (rate.empty()) p.rate.reason = p.rate_kg.reason = "no realization has a discharge rate";
-        p.avalanche = analyze_avalanches(in);
-        try {
-            p.fields = merge_point_fields(in);
-        } catch (const core::StoreError& e) {
-            p.fields = PointFields{};
-            p.fields.enabled = true;
-            p.fields.error = true;
-            p.fields.reason = e.what();
-        }
-
+        PointAnalysis p = analyze_point(in, [&] {
+            const auto it = hidden.find(in.label);
+            return it == hidden.end() ? std::string() : it->second;
+        }());
+        const std::string& group = p.group;
         const auto [it, added] = group_index.emplace(group, static_cast<int>(a.groups.size()));
         if (added) {
             GroupAnalysis g;
@@ -396,64 +468,8 @@ Analysis analyze_points(const std::vector<AnalysisPointInput>& inputs) {
         a.points.push_back(std::move(p));
     }
 
-    for (auto& g : a.groups) {
-        std::sort(g.points.begin(), g.points.end(), [&](int x, int y) {
-            return a.points[static_cast<std::size_t>(x)].D_cm <
-                   a.points[static_cast<std::size_t>(y)].D_cm;
-        });
-        // Beverloo: mean mass flow rate per outlet, weighted by its standard error when every
-        // point has one (relative weights; the covariance is scaled by the residual variance).
-        std::vector<double> D, W, sW;
-        bool all_se = true;
-        double rho_b = 0.0, d = 0.0;
-        for (int i : g.points) {
-            const auto& p = a.points[static_cast<std::size_t>(i)];
-            rho_b = p.rho_b;
-            d = p.d_mean;
-            if (!p.rate_kg.mean || !(*p.rate_kg.mean > 0.0)) continue;
-            D.push_back(p.D_cm * cm);
-            W.push_back(*p.rate_kg.mean);
-            if (p.rate_kg.std_err && *p.rate_kg.std_err > 0.0)
-                sW.push_back(*p.rate_kg.std_err);
-            else
-                all_se = false;
-        }
-        if (!all_se) sW.clear();
-        if (rho_b > 0.0 && d > 0.0) {
-            g.beverloo = stats::fit_beverloo(D, W, sW, rho_b, d);
-        } else {
-            g.beverloo.reason = "the scene lacks the density, thickness or diameters";
-            g.beverloo.n_points = static_cast<int>(D.size());
-        }
-        // Jam rate 1/tau versus D: points without a jam have no rate and are left out.
-        std::vector<double> Dj, rate, sigma;
-        for (int i : g.points) {
-            const auto& p = a.points[static_cast<std::size_t>(i)];
-            if (p.fit && p.fit->tau && p.fit->sigma_log_tau) {
-                Dj.push_back(p.D_cm * cm);
-                rate.push_back(1.0 / *p.fit->tau);
-                sigma.push_back(*p.fit->sigma_log_tau);
-            } else {
-                g.jam_rate_left_out.emplace_back(p.D_cm,
-                                                 p.fit_reason.empty() ? "no jams" : p.fit_reason);
-            }
-        }
-        g.jam_rate = stats::fit_jam_rate(Dj, rate, sigma);
-        // <s>(D) through p = 1/<s>, sigma(ln p) = 1/sqrt(r) as for the jam rate.
-        std::vector<double> Ds, ps, ss;
-        for (int i : g.points) {
-            const auto& av = a.points[static_cast<std::size_t>(i)].avalanche;
-            if (av.fit && av.fit->tau && av.fit->sigma_log_tau) {
-                Ds.push_back(a.points[static_cast<std::size_t>(i)].D_cm * cm);
-                ps.push_back(1.0 / *av.fit->tau);
-                ss.push_back(*av.fit->sigma_log_tau);
-            } else {
-                g.avalanche_left_out.emplace_back(a.points[static_cast<std::size_t>(i)].D_cm,
-                                                  av.reason.empty() ? "no jams" : av.reason);
-            }
-        }
-        g.avalanche = stats::fit_jam_rate(Ds, ps, ss);
-    }
+    for (auto& g : a.groups)
+        fit_group(g, a.points);
     return a;
 }
 
