@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config git
-  libeigen3-dev libboost-program-options-dev libtomlplusplus-dev
+  libeigen3-dev libboost-program-options-dev libtomlplusplus-dev nlohmann-json3-dev
   libhdf5-dev hdf5-tools libopenmpi-dev openmpi-bin
   libgtest-dev googletest
   python3 python3-numpy python3-scipy python3-matplotlib python3-h5py python3-pandas python3-xarray

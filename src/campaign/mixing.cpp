@@ -2,18 +2,18 @@
 
 #include <map>
 #include <set>
-#include <sstream>
+
+#include "hopper/config/sweep.hpp"
 
 namespace hopper::campaign {
 
 namespace {
 
-std::map<std::string, std::string> scene_values(const std::string& text) {
+// Name -> value text ("0.5", "verlet"), as labels write them.
+std::map<std::string, std::string> values(const std::vector<core::Setting>& settings) {
     std::map<std::string, std::string> m;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);)
-        if (const auto eq = line.find('='); eq != std::string::npos)
-            m[line.substr(0, eq)] = line.substr(eq + 1);
+    for (const auto& s : settings)
+        m[s.name] = config::value_text(s);
     return m;
 }
 
@@ -22,33 +22,29 @@ std::string value_or_absent(const std::map<std::string, std::string>& m, const s
     return it == m.end() ? "absent" : it->second;
 }
 
-}  // namespace
-
-namespace {
-
-// A label's settings other than the outlet: {"theta_deg": "60", "material.mu": "0.5"}.
-std::map<std::string, std::string> label_settings(const std::string& label) {
-    std::map<std::string, std::string> m;
-    std::istringstream in(label);
-    for (std::string token; in >> token;)
-        if (const auto eq = token.find('=');
-            eq != std::string::npos && token.compare(0, eq, "D_cm"))
-            m[token.substr(0, eq)] = token.substr(eq + 1);
-    return m;
-}
-
 std::string section(const std::string& name) {
     const auto dot = name.find('.');
     return dot == std::string::npos ? name : name.substr(0, dot);
 }
 
 // Whether a difference in scene parameter `k` is told by a label setting `s` that differs: the
-// wall angle by theta_deg; a section's parameters by a setting of that section ([hopper] also
-// holds the particles' keys; walls follow the material unless set).
+// wall angle by theta_deg; a section's parameters by a setting of that section (walls follow
+// the material unless set).
 bool explains(const std::string& s, const std::string& k) {
-    if (s == "theta_deg") return k == "hopper.theta_rad";
+    if (s == "theta_deg") return k == "theta_deg";
     const std::string ss = section(s), ks = section(k);
-    return ss == ks || (ss == "hopper" && ks == "particles") || (ss == "material" && ks == "walls");
+    return ss == ks || (ss == "material" && ks == "walls");
+}
+
+// The label settings (other than the outlet) in which two points differ.
+std::set<std::string> told_apart(const std::map<std::string, std::string>& a,
+                                 const std::map<std::string, std::string>& b) {
+    std::set<std::string> told;
+    for (const auto& [k, v] : a)
+        if (k != "D_cm" && value_or_absent(b, k) != v) told.insert(k);
+    for (const auto& [k, v] : b)
+        if (k != "D_cm" && value_or_absent(a, k) != v) told.insert(k);
+    return told;
 }
 
 }  // namespace
@@ -59,31 +55,28 @@ std::vector<MixedSetting> mixed_settings(const store::CampaignPlan& stored,
     std::map<std::string, std::set<std::string>> others;
     for (const auto& p : sweep.points) {
         if (stored.find(p.label) != nullptr) continue;  // only new points can mix
-        const auto mine = scene_values(p.scene);
-        const auto my_labels = label_settings(p.label);
+        const auto mine = values(p.parameters);
+        const auto my_labels = values(p.settings);
         for (const auto& q : stored.points) {
-            const auto theirs = scene_values(q.scene);
-            const auto their_labels = label_settings(q.label);
-            std::set<std::string> told;  // label settings that differ between p and q
-            for (const auto& [k, v] : my_labels)
-                if (value_or_absent(their_labels, k) != v) told.insert(k);
-            for (const auto& [k, v] : their_labels)
-                if (value_or_absent(my_labels, k) != v) told.insert(k);
+            // A point stored before typed parameters whose sweep text could not be read back
+            // (campaign::restore_settings) cannot be compared.
+            if (q.parameters.empty()) continue;
+            const auto theirs = values(q.parameters);
+            const std::set<std::string> told = told_apart(my_labels, values(q.settings));
             std::set<std::string> names;
             for (const auto& [k, v] : mine)
                 names.insert(k);
             for (const auto& [k, v] : theirs)
                 names.insert(k);
             for (const auto& k : names) {
-                if (k == "hopper.outlet_m") continue;  // D is in every label
+                if (k == "D_cm") continue;  // D is in every label
                 const std::string a = value_or_absent(mine, k), b = value_or_absent(theirs, k);
                 if (a == b) continue;
                 bool is_told = false;
                 for (const auto& s : told)
                     is_told = is_told || explains(s, k);
                 if (is_told) continue;
-                auto [it, fresh] = found.try_emplace(k, MixedSetting{k, a, {}, q.label});
-                (void)fresh;
+                found.try_emplace(k, MixedSetting{k, a, {}, q.label});
                 others[k].insert(b);
             }
         }
@@ -99,10 +92,10 @@ std::vector<MixedSetting> mixed_settings(const store::CampaignPlan& stored,
 std::string describe(const std::vector<MixedSetting>& mixed) {
     std::string s;
     for (const auto& m : mixed) {
-        std::string values;
+        std::string vals;
         for (const auto& v : m.store_values)
-            values += (values.empty() ? "" : ", ") + v;
-        s += "\n    " + m.name + " = " + m.sweep_value + " in this sweep, " + values +
+            vals += (vals.empty() ? "" : ", ") + v;
+        s += "\n    " + m.name + " = " + m.sweep_value + " in this sweep, " + vals +
              " in the store (point '" + m.store_point + "')";
     }
     return s;

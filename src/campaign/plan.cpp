@@ -4,7 +4,6 @@
 #include <charconv>
 #include <cmath>
 #include <map>
-#include <sstream>
 
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
@@ -40,21 +39,38 @@ class Lines {
     std::string text_;
 };
 
-std::map<std::string, std::string> parse_lines(const std::string& text) {
+// "name=value" texts of typed settings, by name.
+std::map<std::string, std::string> by_name(const std::vector<core::Setting>& settings) {
     std::map<std::string, std::string> m;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);) {
-        const auto eq = line.find('=');
-        if (eq != std::string::npos) m[line.substr(0, eq)] = line.substr(eq + 1);
-    }
+    for (const auto& s : settings)
+        m[s.name] = config::value_text(s);
     return m;
+}
+
+// The parameters in which two points of different physics differ, one "\n    name = value
+// (store: value)" line each.
+std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& stored) {
+    if (mine.parameters.empty() || stored.parameters.empty())
+        return "\n    (the physics text differs; the store's sweep file cannot be read back to "
+               "name the parameter)";
+    const auto a = by_name(mine.parameters), b = by_name(stored.parameters);
+    std::string diff;
+    for (const auto& [k, v] : a) {
+        const auto it = b.find(k);
+        const std::string old = it == b.end() ? "absent" : it->second;
+        if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
+    }
+    for (const auto& [k, v] : b)
+        if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+    return diff.empty() ? "\n    (the physics text differs in a value no sweep key sets)" : diff;
 }
 
 }  // namespace
 
 std::string scene_text(const engine::SceneParams& p) {
-    // Keep in step with engine::SceneParams: test_plan checks sizeof(SceneParams) so that a new
-    // field cannot be forgotten here.
+    // Keep in step with engine::SceneParams (every field that changes the physics). The text is
+    // a fingerprint only: it is hashed and compared, never parsed back into values (the typed
+    // `parameters` of the plan are for that).
     Lines l;
     l.add("hopper.width_m", p.hopper.width);
     l.add("hopper.outlet_m", p.hopper.outlet);
@@ -148,11 +164,44 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
         p.D_cm = pt.scene.hopper.outlet / core::cm;
         p.theta_deg = pt.scene.hopper.theta / core::deg;
         p.particles = pt.scene.particles.count;
+        p.settings = pt.settings;
+        p.parameters = pt.parameters;
         for (int r = 0; r < pt.realizations; ++r)
             p.seeds.push_back(config::derive_seed(spec.seed, pt.settings, r));
         plan.points.push_back(std::move(p));
     }
     return plan;
+}
+
+void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSummary>& runs) {
+    const auto missing = [](const store::PointPlan& p) {
+        return p.settings.empty() || p.parameters.empty();
+    };
+    if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
+    for (auto run = runs.rbegin(); run != runs.rend(); ++run) {
+        std::vector<config::Point> points;
+        try {
+            points = config::parse_sweep(run->info.sweep_text, "<recorded sweep>").campaign.points;
+        } catch (const core::ConfigError&) {
+            continue;  // written for another version of the keys: no help
+        }
+        for (auto& p : plan.points) {
+            if (!missing(p)) continue;
+            for (const auto& q : points)
+                if (q.label == p.label && scene_text(q.scene) == p.scene) {
+                    p.settings = q.settings;
+                    p.parameters = q.parameters;
+                    break;
+                }
+        }
+        if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
+    }
+}
+
+store::CampaignPlan read_plan(const std::filesystem::path& store) {
+    store::StoreStatus status = store::read_status(store);
+    restore_settings(status.plan, status.runs);
+    return std::move(status.plan);
 }
 
 std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
@@ -179,17 +228,7 @@ std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
         }
         if (p.scene != s->scene) {
             ++changed;
-            const auto mine = parse_lines(p.scene);
-            const auto theirs = parse_lines(s->scene);
-            std::string diff;
-            for (const auto& [k, v] : mine) {
-                const auto it = theirs.find(k);
-                const std::string old = it == theirs.end() ? "absent" : it->second;
-                if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
-            }
-            for (const auto& [k, v] : theirs)
-                if (!mine.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
-            by_diff[diff].push_back(p.label);
+            by_diff[physics_diff(p, *s)].push_back(p.label);
             continue;
         }
         const std::size_t n = std::min(p.seeds.size(), s->seeds.size());

@@ -193,9 +193,11 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     const store::CampaignPlan plan = make_plan(spec);
     const bool resumed = !st.is_new();
     if (resumed) {
-        for (const auto& n : check_compatible(st.plan(), plan))
+        store::CampaignPlan stored = st.plan();  // typed settings restored for old points
+        restore_settings(stored, st.status().runs);
+        for (const auto& n : check_compatible(stored, plan))
             err << "campaign: note: " << n << '\n';
-        if (const auto mixed = mixed_settings(st.plan(), plan); !mixed.empty()) {
+        if (const auto mixed = mixed_settings(stored, plan); !mixed.empty()) {
             if (!opt.allow_mixed)
                 throw core::ConfigError(
                     "the sweep adds points whose settings, not varied by the sweep, differ "

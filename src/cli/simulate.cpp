@@ -45,7 +45,15 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
         for (const auto& q : sweep.campaign.points) {
             if (q.label != label) continue;
             if (campaign::scene_text(q.scene) != p->scene) break;
-            return {q.scene, p->seeds[static_cast<std::size_t>(realization)], p->D_cm, p->theta_deg,
+            // The outlet and angle as the sweep file wrote them (typed settings).
+            const auto written = [&q](const char* name, double fallback) {
+                for (const auto& s : q.settings)
+                    if (s.name == name && std::holds_alternative<double>(s.value))
+                        return std::get<double>(s.value);
+                return fallback;
+            };
+            return {q.scene, p->seeds[static_cast<std::size_t>(realization)],
+                    written("D_cm", p->D_cm), written("theta_deg", p->theta_deg),
                     r->info.sweep_path};
         }
     }

@@ -7,7 +7,7 @@
 #include <iostream>
 #include <map>
 
-#include "cli/json_writer.hpp"
+#include "hopper/analysis/json.hpp"
 #include "hopper/campaign/adaptive.hpp"
 #include "hopper/campaign/checkpoints.hpp"
 #include "hopper/campaign/plan.hpp"
@@ -119,97 +119,72 @@ void print_status_help(std::ostream& os) {
 }
 
 std::string status_json(const store::StoreStatus& s) {
-    JsonWriter w;
-    w.begin_object();
-    w.field("store", s.store.string());
-    w.field("campaign", s.campaign_name);
-    w.field("physics_hash", store::hex64(s.physics_hash));
-    w.field("active", s.writer_active);
-    w.field("hdf5_in_step", s.hdf5_in_step);
-    w.field("total", s.total);
-    w.field("done", s.done);
-    w.field("failed", s.failed);
-    w.field("errors", s.errors);
-    w.field("pending", s.pending);
+    using analysis::Json;
+    using analysis::json_number;
+    Json j;
+    j["store"] = s.store.string();
+    j["campaign"] = s.campaign_name;
+    j["physics_hash"] = store::hex64(s.physics_hash);
+    j["active"] = s.writer_active;
+    j["hdf5_in_step"] = s.hdf5_in_step;
+    j["total"] = s.total;
+    j["done"] = s.done;
+    j["failed"] = s.failed;
+    j["errors"] = s.errors;
+    j["pending"] = s.pending;
     const ProgressEstimate pe = estimate_progress(s, store::unix_now());
-    w.field("per_hour", pe.per_hour);
-    w.key("eta_seconds");
-    if (pe.eta_seconds)
-        w.value(*pe.eta_seconds);
-    else
-        w.null();
-    w.field("eta_basis", pe.basis);
-    w.key("busy_workers").begin_array();
-    for (const auto& [rank, age] : pe.busy) {
-        w.begin_object_inline();
-        w.field("rank", rank);
-        w.field("seconds", age);
-        w.end_object();
-    }
-    w.end_array();
+    j["per_hour"] = json_number(pe.per_hour);
+    j["eta_seconds"] = pe.eta_seconds ? json_number(*pe.eta_seconds) : Json(nullptr);
+    j["eta_basis"] = pe.basis;
+    Json busy = Json::array();
+    for (const auto& [rank, age] : pe.busy)
+        busy.push_back(Json{{"rank", rank}, {"seconds", json_number(age)}});
+    j["busy_workers"] = std::move(busy);
     const double now = store::unix_now();
-    w.key("running").begin_array();
-    for (const auto& t : running_tasks(s)) {
-        w.begin_object_inline();
-        w.field("worker", t.worker);
-        w.field("label", t.label);
-        w.field("realization", t.realization);
-        w.field("attempt", t.attempt);
-        w.field("seconds", std::max(0.0, now - t.start_unix));
-        w.field("resumed", t.resumed);
-        w.end_object();
-    }
-    w.end_array();
-    w.field("checkpoints", checkpoint_files(s));
-    w.key("points").begin_array();
-    for (const auto& p : s.points) {
-        w.begin_object_inline();
-        w.field("label", p.label);
-        w.field("total", p.planned);
-        w.field("done", p.done);
-        w.field("failed", p.failed);
-        w.field("errors", p.errors);
-        w.field("pending", p.pending);
-        w.end_object();
-    }
-    w.end_array();
-    w.key("failures").begin_array();
-    for (const auto& f : s.failures) {
-        w.begin_object_inline();
-        w.field("label", f.label);
-        w.field("realization", f.realization);
-        w.field("seed", f.seed);
-        w.field("kind", f.exception ? "error" : "failed");
-        w.field("reason", f.reason);
-        w.end_object();
-    }
-    w.end_array();
-    w.key("runs").begin_array();
+    Json running = Json::array();
+    for (const auto& t : running_tasks(s))
+        running.push_back(Json{{"worker", t.worker},
+                               {"label", t.label},
+                               {"realization", t.realization},
+                               {"attempt", t.attempt},
+                               {"seconds", json_number(std::max(0.0, now - t.start_unix))},
+                               {"resumed", t.resumed}});
+    j["running"] = std::move(running);
+    j["checkpoints"] = checkpoint_files(s);
+    Json points = Json::array();
+    for (const auto& p : s.points)
+        points.push_back(Json{{"label", p.label},
+                              {"total", p.planned},
+                              {"done", p.done},
+                              {"failed", p.failed},
+                              {"errors", p.errors},
+                              {"pending", p.pending}});
+    j["points"] = std::move(points);
+    Json failures = Json::array();
+    for (const auto& f : s.failures)
+        failures.push_back(Json{{"label", f.label},
+                                {"realization", f.realization},
+                                {"seed", f.seed},
+                                {"kind", f.exception ? "error" : "failed"},
+                                {"reason", f.reason}});
+    j["failures"] = std::move(failures);
+    Json runs = Json::array();
     for (const auto& r : s.runs) {
-        w.begin_object_inline();
-        w.field("start_time", r.info.start_time);
-        w.key("end_time");
-        if (r.end)
-            w.value(r.end->end_time);
-        else
-            w.null();
-        w.key("end_reason");
-        if (r.end)
-            w.value(r.end->reason);
-        else
-            w.null();
-        w.field("code_version", r.info.code_version);
-        w.field("mpi_size", r.info.mpi_size);
-        w.field("workers", r.info.workers);
-        w.field_array("hosts", r.info.hosts);
-        w.field("stored", r.stored);
-        w.field("lost_worker_seconds", r.end ? r.end->lost_worker_seconds : 0.0);
-        w.field("saved_worker_seconds", r.end ? r.end->saved_worker_seconds : 0.0);
-        w.end_object();
+        Json o;
+        o["start_time"] = r.info.start_time;
+        o["end_time"] = r.end ? Json(r.end->end_time) : Json(nullptr);
+        o["end_reason"] = r.end ? Json(r.end->reason) : Json(nullptr);
+        o["code_version"] = r.info.code_version;
+        o["mpi_size"] = r.info.mpi_size;
+        o["workers"] = r.info.workers;
+        o["hosts"] = r.info.hosts;
+        o["stored"] = r.stored;
+        o["lost_worker_seconds"] = json_number(r.end ? r.end->lost_worker_seconds : 0.0);
+        o["saved_worker_seconds"] = json_number(r.end ? r.end->saved_worker_seconds : 0.0);
+        runs.push_back(std::move(o));
     }
-    w.end_array();
-    w.end_object();
-    return w.str();
+    j["runs"] = std::move(runs);
+    return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 void write_status(std::ostream& out, const store::StoreStatus& s) {

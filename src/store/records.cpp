@@ -33,6 +33,38 @@ const PointPlan* CampaignPlan::find(const std::string& label) const {
 
 namespace {
 
+// A typed setting: name, u8 kind (0: number, 1: text), then the f64 or the string.
+void put(ByteWriter& w, const std::vector<core::Setting>& settings) {
+    w.u32(static_cast<std::uint32_t>(settings.size()));
+    for (const auto& s : settings) {
+        w.str(s.name);
+        if (const auto* x = std::get_if<double>(&s.value)) {
+            w.u8(0);
+            w.f64(*x);
+        } else {
+            w.u8(1);
+            w.str(std::get<std::string>(s.value));
+        }
+    }
+}
+
+std::vector<core::Setting> get_settings(ByteReader& r) {
+    const std::uint32_t n = r.u32();
+    if (n > r.remaining()) r.fail("a setting count of " + std::to_string(n) + " is impossible");
+    std::vector<core::Setting> out(n);
+    for (auto& s : out) {
+        s.name = r.str();
+        const std::uint8_t kind = r.u8();
+        if (kind == 0)
+            s.value = r.f64();
+        else if (kind == 1)
+            s.value = r.str();
+        else
+            r.fail("setting '" + s.name + "' has an unknown kind " + std::to_string(kind));
+    }
+    return out;
+}
+
 void put(ByteWriter& w, const CampaignPlan& p) {
     w.str(p.name);
     w.u64(p.seed);
@@ -46,6 +78,12 @@ void put(ByteWriter& w, const CampaignPlan& p) {
         w.u32(static_cast<std::uint32_t>(pt.seeds.size()));
         for (auto s : pt.seeds)
             w.u64(s);
+    }
+    // Typed settings (added later, after every point, so that records written before them end
+    // here and read back with empty vectors): per point its settings, then its parameters.
+    for (const auto& pt : p.points) {
+        put(w, pt.settings);
+        put(w, pt.parameters);
     }
 }
 
@@ -69,6 +107,11 @@ CampaignPlan get_plan(ByteReader& r) {
         for (auto& s : pt.seeds)
             s = r.u64();
     }
+    if (r.remaining() > 0)
+        for (auto& pt : p.points) {
+            pt.settings = get_settings(r);
+            pt.parameters = get_settings(r);
+        }
     return p;
 }
 

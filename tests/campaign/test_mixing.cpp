@@ -1,16 +1,25 @@
 // No silent mixing (campaign/mixing.hpp): new points whose physics differs from stored points in
-// something their labels do not show are found; differences the labels tell are not.
+// something their labels do not show are found; differences the labels tell are not. Points are
+// compared by their typed settings (the label's) and parameters (every scene key).
 #include "hopper/campaign/mixing.hpp"
 
 #include <gtest/gtest.h>
 
+#include "hopper/config/sweep.hpp"
+
 namespace hopper::campaign {
 namespace {
 
-store::PointPlan point(const std::string& label, const std::string& scene) {
+using Settings = std::vector<core::Setting>;
+
+store::PointPlan point(const Settings& settings, Settings parameters) {
     store::PointPlan p;
-    p.label = label;
-    p.scene = scene;
+    for (const auto& s : settings) {
+        if (!p.label.empty()) p.label += ' ';
+        p.label += config::to_string(s);
+    }
+    p.settings = settings;
+    p.parameters = std::move(parameters);
     p.seeds = {1, 2};
     return p;
 }
@@ -21,26 +30,28 @@ store::CampaignPlan plan(std::vector<store::PointPlan> points) {
     return c;
 }
 
-const std::string base = "hopper.theta_rad=1\nmaterial.mu=0.8\nwalls.mu=0.8\n";
+// The base scene's parameters at outlet D.
+Settings base_at(double D) {
+    return {{"D_cm", D}, {"theta_deg", 60.0}, {"material.mu", 0.8}, {"walls.mu", 0.8}};
+}
 
-// The base scene with an outlet line first.
-std::string base_at(const char* outlet_line) {
-    std::string s(outlet_line);
-    s.append(base);
-    return s;
+Settings label(double D, double theta) {
+    return {{"D_cm", D}, {"theta_deg", theta}};
 }
 
 TEST(Mixing, NewOutletsOfTheSamePhysicsAreFine) {
-    const auto stored = plan({point("D_cm=2 theta_deg=60", base_at("hopper.outlet_m=0.02\n"))});
-    const auto sweep = plan({point("D_cm=3 theta_deg=60", base_at("hopper.outlet_m=0.03\n"))});
+    const auto stored = plan({point(label(2, 60), base_at(2))});
+    const auto sweep = plan({point(label(3, 60), base_at(3))});
     EXPECT_TRUE(mixed_settings(stored, sweep).empty());
 }
 
 TEST(Mixing, AnUnvariedSettingThatDiffersIsFound) {
-    const auto stored = plan({point("D_cm=2 theta_deg=60", base_at("hopper.outlet_m=0.02\n"))});
-    const auto sweep = plan({point("D_cm=3 theta_deg=60",
-                                   "hopper.outlet_m=0.03\nhopper.theta_rad=1\nmaterial.mu=0.5\n"
-                                   "walls.mu=0.5\nprotocol.max_time_s=9\n")});
+    const auto stored = plan({point(label(2, 60), base_at(2))});
+    const auto sweep = plan({point(label(3, 60), {{"D_cm", 3.0},
+                                                  {"theta_deg", 60.0},
+                                                  {"material.mu", 0.5},
+                                                  {"walls.mu", 0.5},
+                                                  {"protocol.max_time_s", 9.0}})});
     const auto m = mixed_settings(stored, sweep);
     ASSERT_EQ(m.size(), 3u);
     EXPECT_EQ(m[0].name, "material.mu");
@@ -57,24 +68,26 @@ TEST(Mixing, AnUnvariedSettingThatDiffersIsFound) {
 
 TEST(Mixing, DifferencesTheLabelsTellAreFine) {
     // a new wall angle, and a material setting that is in the labels (walls follow it)
-    const auto stored =
-        plan({point("D_cm=2 theta_deg=60 material.mu=0.8", base_at("hopper.outlet_m=0.02\n"))});
-    const auto sweep = plan({point("D_cm=2 theta_deg=45 material.mu=0.5",
-                                   "hopper.outlet_m=0.02\nhopper.theta_rad=0.7\nmaterial.mu=0.5\n"
-                                   "walls.mu=0.5\n")});
+    Settings with_mu = label(2, 60);
+    with_mu.push_back({"material.mu", 0.8});
+    const auto stored = plan({point(with_mu, base_at(2))});
+    Settings other = label(2, 45);
+    other.push_back({"material.mu", 0.5});
+    const auto sweep = plan({point(
+        other, {{"D_cm", 2.0}, {"theta_deg", 45.0}, {"material.mu", 0.5}, {"walls.mu", 0.5}})});
     EXPECT_TRUE(mixed_settings(stored, sweep).empty());
     // ... but a changed wall angle does not account for a changed friction
-    const auto sweep2 = plan({point("D_cm=2 theta_deg=45",
-                                    "hopper.outlet_m=0.02\nhopper.theta_rad=0.7\nmaterial.mu=0.5\n"
-                                    "walls.mu=0.8\n")});
-    const auto stored2 = plan({point("D_cm=2 theta_deg=60", base_at("hopper.outlet_m=0.02\n"))});
+    const auto sweep2 = plan(
+        {point(label(2, 45),
+               {{"D_cm", 2.0}, {"theta_deg", 45.0}, {"material.mu", 0.5}, {"walls.mu", 0.8}})});
+    const auto stored2 = plan({point(label(2, 60), base_at(2))});
     const auto m = mixed_settings(stored2, sweep2);
     ASSERT_EQ(m.size(), 1u);
     EXPECT_EQ(m[0].name, "material.mu");
 }
 
 TEST(Mixing, AResumeNeverMixes) {
-    const auto stored = plan({point("D_cm=2 theta_deg=60", base_at("hopper.outlet_m=0.02\n"))});
+    const auto stored = plan({point(label(2, 60), base_at(2))});
     EXPECT_TRUE(mixed_settings(stored, stored).empty());
     EXPECT_TRUE(mixed_settings(plan({}), stored).empty());
 }

@@ -49,9 +49,9 @@ std::string refusal(const store::CampaignPlan& stored, const store::CampaignPlan
 }
 
 TEST(Plan, SceneTextCoversEverySceneParameter) {
-    // If this fails, engine::SceneParams gained (or lost) a field: add it to scene_text() in
-    // src/campaign/plan.cpp (it decides which stores a sweep may resume), then update the size.
-    EXPECT_EQ(sizeof(engine::SceneParams), 488u);
+    // A field added to engine::SceneParams belongs in scene_text() (src/campaign/plan.cpp: it
+    // decides which stores a sweep may resume) and, when a sweep file may set it, in the config's
+    // key table (which gives the plan's typed parameters).
     engine::SceneParams p;
     const std::string base = scene_text(p);
     EXPECT_EQ(std::count(base.begin(), base.end(), '\n'), 40);
@@ -117,6 +117,43 @@ TEST(Plan, SeedsAndLabelsMatchTheConfigTaskList) {
                       static_cast<std::size_t>(t.realization)),
                   t.seed);
     EXPECT_EQ(plan.seed, 7u);
+}
+
+TEST(Plan, CarriesTheTypedSettingsAndParametersAndTheJournalKeepsThem) {
+    const auto s = sweep();
+    const auto plan = make_plan(s.campaign);
+    ASSERT_EQ(plan.points.size(), 2u);
+    const store::PointPlan& p = plan.points[1];
+    EXPECT_EQ(p.settings, s.campaign.points[1].settings);
+    EXPECT_EQ(p.parameters, s.campaign.points[1].parameters);
+    ASSERT_FALSE(p.settings.empty());
+    EXPECT_EQ(p.settings[0], (core::Setting{"D_cm", 3.0}));
+    const auto width = std::find_if(p.parameters.begin(), p.parameters.end(),
+                                    [](const auto& q) { return q.name == "hopper.width_cm"; });
+    ASSERT_NE(width, p.parameters.end());
+    EXPECT_EQ(width->value, (std::variant<double, std::string>(8.0)));
+    // The run-start record keeps them ...
+    store::RunStartRecord r;
+    r.plan = plan;
+    const store::Bytes bytes = store::encode(r);
+    const store::RunStartRecord back = store::decode_run_start(bytes);
+    ASSERT_EQ(back.plan.points.size(), 2u);
+    EXPECT_EQ(back.plan.points[1].settings, p.settings);
+    EXPECT_EQ(back.plan.points[1].parameters, p.parameters);
+    EXPECT_EQ(back.plan.points[1].scene, p.scene);
+    // ... and a record written before they existed (the plan ends after the seeds) reads back
+    // with empty vectors.
+    r.plan.points[0].settings.clear();
+    r.plan.points[0].parameters.clear();
+    r.plan.points[1].settings.clear();
+    r.plan.points[1].parameters.clear();
+    store::Bytes old = store::encode(r);
+    old.resize(old.size() - 2 * 2 * 4);  // two empty lists (u32 0) per point
+    const store::RunStartRecord before = store::decode_run_start(old);
+    ASSERT_EQ(before.plan.points.size(), 2u);
+    EXPECT_TRUE(before.plan.points[1].settings.empty());
+    EXPECT_TRUE(before.plan.points[1].parameters.empty());
+    EXPECT_EQ(before.plan.points[1].seeds, p.seeds);
 }
 
 TEST(Plan, ExtensionIsAccepted) {

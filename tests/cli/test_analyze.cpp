@@ -1,7 +1,7 @@
-// `campaign analyze`'s pure part (cli/analyze.hpp) on fabricated realizations: what it takes
-// from each result, the null-with-reason rule, grouping by wall angle, the Beverloo and jam-rate
-// inputs, and the /analysis group it builds. The store and the executable are tested end to end
-// by tests/campaign/analyze.sh.
+// `campaign analyze`'s pure part (the analysis layer, hopper/analysis) on fabricated realizations:
+// what it takes from each result, the null-with-reason rule, grouping by wall angle, the Beverloo
+// and jam-rate inputs, and the /analysis group it builds. The store and the executable are tested
+// end to end by tests/campaign/analyze.sh.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,16 +10,23 @@
 #include <sstream>
 #include <utility>
 
+#include <nlohmann/json.hpp>
+
 #include "../store/fixtures.hpp"
 #include "cli/analyze.hpp"
+#include "hopper/analysis/analyze.hpp"
+#include "hopper/analysis/derived.hpp"
+#include "hopper/analysis/json.hpp"
+#include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/engine/fields.hpp"
 #include "hopper/store/analysis.hpp"
 #include "hopper/store/store.hpp"
 
-namespace hopper::cli {
+namespace hopper::analysis {
 namespace {
 
+using cli::analyze_store;
 using engine::RealizationResult;
 using engine::Status;
 
@@ -43,21 +50,32 @@ RealizationResult result(Status s, std::vector<double> t, bool last_censored = t
     return r;
 }
 
-std::map<std::string, std::string> scene() {
-    return {{"particles.density_kg_m3", "1000"},
-            {"particles.thickness_m", "0.0032"},
-            {"particles.small_fraction", "0.5"},
-            {"particles.d_small_m", "0.006"},
-            {"particles.d_large_m", "0.008"}};
+// The scene parameters the Beverloo inputs come from (sweep-file names and units).
+std::vector<core::Setting> parameters() {
+    return {{"hopper.density_kg_m3", 1000.0},
+            {"hopper.thickness_cm", 0.32},
+            {"hopper.small_fraction", 0.5},
+            {"hopper.d_small_cm", 0.6},
+            {"hopper.d_large_cm", 0.8}};
 }
 
+// A point whose settings are D and theta as a user writes them ("%g"), plus `extra`; the plan's
+// SI round trip (D_cm, theta_deg of the input) keeps the values given.
 AnalysisPointInput point(double D, double theta, std::vector<RealizationResult> rs,
-                         std::string extra = "") {
+                         std::vector<core::Setting> extra = {}) {
     AnalysisPointInput p;
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "D_cm=%g theta_deg=%g", D, theta);
-    p.label = buf + extra;
-    p.scene = scene();
+    const auto written = [](double v) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%g", v);
+        return std::stod(buf);
+    };
+    p.settings = {{"D_cm", written(D)}, {"theta_deg", written(theta)}};
+    p.settings.insert(p.settings.end(), extra.begin(), extra.end());
+    for (const auto& s : p.settings) {
+        if (!p.label.empty()) p.label += ' ';
+        p.label += config::to_string(s);
+    }
+    p.parameters = parameters();
     p.D_cm = D;
     p.theta_deg = theta;
     p.planned = static_cast<int>(rs.size());
@@ -108,9 +126,9 @@ TEST(Analyze, NoJamsGivesNullWithReasonNeverANumber) {
 
 TEST(Analyze, GroupsByWallAngleAndOtherVariedSettingsFromTheLabel) {
     const Analysis a = analyze_points(
-        {point(2.0, 44.99999999999999, {result(Status::complete, {1.0})}, " material.mu=0.5"),
-         point(3.0, 45, {result(Status::complete, {1.0})}, " material.mu=0.5"),
-         point(2.0, 45, {result(Status::complete, {1.0})}, " material.mu=0.3")});
+        {point(2.0, 44.99999999999999, {result(Status::complete, {1.0})}, {{"material.mu", 0.5}}),
+         point(3.0, 45, {result(Status::complete, {1.0})}, {{"material.mu", 0.5}}),
+         point(2.0, 45, {result(Status::complete, {1.0})}, {{"material.mu", 0.3}})});
     ASSERT_EQ(a.groups.size(), 2u);
     EXPECT_EQ(a.groups[0].group, "theta_deg=45 material.mu=0.5");
     EXPECT_EQ(a.groups[0].points.size(), 2u);
@@ -220,7 +238,9 @@ TEST(AnalyzeAvalanches, MeanSizeIsGrainsPerJamWithTheChiSquareInterval) {
     EXPECT_NEAR(*av.arch_mean_max_angle_deg, 150.0, 1e-9);
     const std::string json = analysis_json(a, "s.h5", "c");
     EXPECT_NE(json.find("\"p_clog_per_grain\": 0.03"), std::string::npos) << json;
-    EXPECT_NE(json.find("\"size_counts\": {\"3\": 2, \"4\": 1}"), std::string::npos) << json;
+    EXPECT_EQ(nlohmann::json::parse(json)["points"][0]["avalanche"]["arches"]["size_counts"],
+              (nlohmann::json{{"3", 2}, {"4", 1}}))
+        << json;
 }
 
 TEST(AnalyzeAvalanches, ResultsWithoutSizesAreCountedAndLeftOut) {
@@ -262,22 +282,21 @@ TEST(AnalyzeAvalanches, MeanSizeVersusDFitsTheExponentialExactly) {
 
 // Issue 16 leftover: points pooled with --allow-mixed whose labels do not show a difference.
 TEST(AnalyzeGroups, SettingsTheLabelsHideSplitTheGroups) {
-    auto with_mu = [](double D, const char* mu) {
+    auto with_mu = [](double D, double mu) {
         AnalysisPointInput p = point(D, 60, {result(Status::complete, {0.2, 0.3})});
-        p.scene["material.mu"] = mu;
+        p.parameters.push_back({"material.mu", mu});
         return p;
     };
-    const Analysis a =
-        analyze_points({with_mu(2.0, "0.8"), with_mu(2.5, "0.8"), with_mu(3.0, "0.5")});
+    const Analysis a = analyze_points({with_mu(2.0, 0.8), with_mu(2.5, 0.8), with_mu(3.0, 0.5)});
     ASSERT_EQ(a.groups.size(), 2u);
     EXPECT_EQ(a.groups[0].group, "theta_deg=60 material.mu=0.8");
     EXPECT_EQ(a.groups[0].points.size(), 2u);
     EXPECT_EQ(a.groups[1].group, "theta_deg=60 material.mu=0.5");
     // Labels that show every difference: nothing added (groups as before).
-    const Analysis b = analyze_points({with_mu(2.0, "0.8"), with_mu(2.5, "0.8"), [&] {
+    const Analysis b = analyze_points({with_mu(2.0, 0.8), with_mu(2.5, 0.8), [&] {
                                            AnalysisPointInput p =
                                                point(3.0, 30, {result(Status::complete, {0.2})});
-                                           p.scene["material.mu"] = "0.5";
+                                           p.parameters.push_back({"material.mu", 0.5});
                                            return p;
                                        }()});
     ASSERT_EQ(b.groups.size(), 2u);
@@ -412,11 +431,22 @@ TEST(AnalyzeFields, GridsThatDifferInsideAPointAreAnErrorNamingThePointAndTheRow
 
 // A store written through the store's API: point F samples fields (two realizations with
 // fields and a failed one), point N does not.
-const store::PointPlan F = store::testing::point(
-    "D_cm=4.5 theta_deg=60", 3,
-    "particles.d_large_m=0.0077\nfields.window_s=0.01\nfields.cell_dlarge=2\n"
-    "fields.sample_interval_s=0.001\nfields.start_s=0\nfields.end_s=unset\nfields.kernel=cell\n");
-const store::PointPlan N = store::testing::point("D_cm=3 theta_deg=60", 1);
+// Their typed settings and parameters as the plan records them.
+store::PointPlan typed(store::PointPlan p, double D, bool fields) {
+    p.settings = {{"D_cm", D}, {"theta_deg", 60.0}};
+    p.parameters = {{"D_cm", D},
+                    {"theta_deg", 60.0},
+                    {"hopper.d_large_cm", 0.77},
+                    {"fields.enabled", std::string(fields ? "true" : "false")}};
+    return p;
+}
+const store::PointPlan F = typed(
+    store::testing::point("D_cm=4.5 theta_deg=60", 3,
+                          "particles.d_large_m=0.0077\nfields.window_s=0.01\nfields.cell_dlarge=2\n"
+                          "fields.sample_interval_s=0.001\nfields.start_s=0\nfields.end_s="
+                          "unset\nfields.kernel=cell\n"),
+    4.5, true);
+const store::PointPlan N = typed(store::testing::point("D_cm=3 theta_deg=60", 1), 3.0, false);
 
 std::filesystem::path fields_store(bool with_fields) {
     using store::testing::fabricated;
@@ -486,10 +516,19 @@ TEST(AnalyzeFields, StoreGroupEqualsTheMergedPiecesAndOneAccumulator) {
     EXPECT_DOUBLE_EQ(std::get<std::vector<double>>(x.values).front(), g.x0 + 0.5 * g.cell);
     // JSON: the point with fields has a summary, the other none.
     ASSERT_EQ(analyze_store(path, true, false, json, err), 0);
-    EXPECT_NE(json.str().find("\"fields\": {\"realizations\": 2, \"kernel\": \"cell\""),
-              std::string::npos)
-        << json.str();
-    EXPECT_EQ(json.str().find("\"fields\": {"), json.str().rfind("\"fields\": {"));
+    const auto parsed = nlohmann::ordered_json::parse(json.str());
+    int with_summary = 0;
+    for (const auto& p : parsed["points"]) {
+        if (!p.contains("fields") || !p["fields"].is_object()) continue;
+        ++with_summary;
+        const auto& f = p["fields"];
+        ASSERT_GE(f.size(), 2u) << json.str();
+        EXPECT_EQ(f.begin().key(), "realizations");
+        EXPECT_EQ(f["realizations"], 2);
+        EXPECT_EQ(std::next(f.begin()).key(), "kernel");
+        EXPECT_EQ(f["kernel"], "cell");
+    }
+    EXPECT_EQ(with_summary, 1) << json.str();
 }
 
 TEST(AnalyzeFields, StoreWithoutFieldsHasNoFieldData) {
@@ -506,10 +545,12 @@ TEST(AnalyzeFields, StoreWithoutFieldsHasNoFieldData) {
 }
 
 }  // namespace
-}  // namespace hopper::cli
+}  // namespace hopper::analysis
 
-namespace hopper::cli {
+namespace hopper::analysis {
 namespace {
+
+using cli::analyze_store;
 
 // Issue 14, item 3: stores holding bit-identical realizations in different orders (one thread
 // versus three ranks, or after a kill and resume) gave different gof_p and last-bit different
@@ -558,10 +599,15 @@ TEST(AnalyzeOrder, JsonIsTheSameWhateverOrderTheRealizationsWereStoredIn) {
 // `campaign analyze --json` text.
 TEST(AnalyzeOrder, StoresFilledInDifferentOrdersAnalyseByteForByteTheSame) {
     const auto rs = varied_realizations(12);
-    const store::PointPlan P = store::testing::point(
+    store::PointPlan P = store::testing::point(
         "D_cm=3 theta_deg=60", 12,
         "particles.d_large_m=0.0077\nparticles.density_kg_m3=1000\nparticles.thickness_m=0.003\n"
         "fields.window_s=0.01\nfields.kernel=cell\n");
+    P.settings = {{"D_cm", 3.0}, {"theta_deg", 60.0}};
+    P.parameters = {{"hopper.d_large_cm", 0.77},
+                    {"hopper.density_kg_m3", 1000.0},
+                    {"hopper.thickness_cm", 0.3},
+                    {"fields.enabled", std::string("true")}};
     const auto dir = store::testing::scratch();
     auto analyse = [&](const std::vector<int>& order) {
         const auto path = dir / "s.h5";
@@ -587,4 +633,4 @@ TEST(AnalyzeOrder, StoresFilledInDifferentOrdersAnalyseByteForByteTheSame) {
 }
 
 }  // namespace
-}  // namespace hopper::cli
+}  // namespace hopper::analysis

@@ -18,7 +18,8 @@ using hopper::config::CampaignSpec;
 using hopper::config::derive_seed;
 using hopper::config::expand_tasks;
 using hopper::config::load_sweep;
-using hopper::config::ParamSetting;
+using hopper::core::Setting;
+using SettingValue = std::variant<double, std::string>;
 using hopper::config::parse_sweep;
 using hopper::config::Point;
 using hopper::config::scene_at;
@@ -609,8 +610,8 @@ TEST(SweepParse, RelativeStoreIsResolvedBesideTheSweepFile) {
 // Seeds
 
 TEST(Seeds, DeterministicAndDistinctPerRealizationAndPoint) {
-    const std::vector<ParamSetting> a = {{"D_cm", 2.7}, {"theta_deg", 45.0}};
-    const std::vector<ParamSetting> b = {{"D_cm", 2.9}, {"theta_deg", 45.0}};
+    const std::vector<Setting> a = {{"D_cm", 2.7}, {"theta_deg", 45.0}};
+    const std::vector<Setting> b = {{"D_cm", 2.9}, {"theta_deg", 45.0}};
     EXPECT_EQ(derive_seed(1, a, 0), derive_seed(1, a, 0));
     EXPECT_NE(derive_seed(1, a, 0), derive_seed(1, a, 1));
     EXPECT_NE(derive_seed(1, a, 0), derive_seed(1, b, 0));
@@ -620,7 +621,7 @@ TEST(Seeds, DeterministicAndDistinctPerRealizationAndPoint) {
     c.push_back({"integrator.scheme", std::string("verlet")});
     EXPECT_NE(derive_seed(1, a, 0), derive_seed(1, c, 0));
     // Depends on the settings, not on the order the caller holds them in.
-    const std::vector<ParamSetting> a_rev = {{"theta_deg", 45.0}, {"D_cm", 2.7}};
+    const std::vector<Setting> a_rev = {{"theta_deg", 45.0}, {"D_cm", 2.7}};
     EXPECT_EQ(derive_seed(1, a, 3), derive_seed(1, a_rev, 3));
     EXPECT_THROW(derive_seed(1, a, -1), ConfigError);
 }
@@ -664,11 +665,11 @@ D_cm = 4.0
 
 TEST(Seeds, GoldenValueIsStable) {
     // Changing derive_seed changes every realization of every campaign: do it only on purpose.
-    const std::vector<ParamSetting> s = {{"D_cm", 2.7}, {"theta_deg", 45.0}};
+    const std::vector<Setting> s = {{"D_cm", 2.7}, {"theta_deg", 45.0}};
     const std::uint64_t golden = derive_seed(1, s, 0);
     EXPECT_EQ(golden, derive_seed(1, {{"theta_deg", 45.0}, {"D_cm", 2.7}}, 0));
-    EXPECT_EQ(hopper::config::to_string(ParamSetting{"D_cm", 2.7}), "D_cm=2.7");
-    EXPECT_EQ(hopper::config::to_string(ParamSetting{"theta_deg", 45.0}), "theta_deg=45");
+    EXPECT_EQ(hopper::config::to_string(Setting{"D_cm", 2.7}), "D_cm=2.7");
+    EXPECT_EQ(hopper::config::to_string(Setting{"theta_deg", 45.0}), "theta_deg=45");
     EXPECT_EQ(golden, 5542539634249134159ULL);
 }
 
@@ -918,4 +919,63 @@ TEST(SweepParse, ANarrowHopperNeedsNoDummyOutlet) {
     EXPECT_THAT(error_of(narrow + "[campaign]\nname = \"n\"\n[sweep]\nD_cm = [1.9, 4.2]\n"),
                 HasSubstr("D_cm = 4.2 must be smaller than hopper.width_cm = 4"));
     EXPECT_THROW(scene_at(f, 4.5, 60), ConfigError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Typed parameters: every key of the table, as the file gave it or converted from the default
+
+namespace {
+const Setting* find_setting(const std::vector<Setting>& v, const std::string& name) {
+    for (const auto& s : v)
+        if (s.name == name) return &s;
+    return nullptr;
+}
+}  // namespace
+
+TEST(Parameters, EveryKeyUnderItsSweepNameAsGivenOrFromTheDefault) {
+    const SweepFile s = parse(R"(
+[hopper]
+density_kg_m3 = 2500
+[campaign]
+name = "t"
+[sweep]
+D_cm = [6]
+theta_deg = [45]
+material.mu = [0.5]
+)");
+    ASSERT_EQ(s.campaign.points.size(), 1u);
+    const Point& p = s.campaign.points[0];
+    // The settings are the label's, in its order.
+    ASSERT_EQ(p.settings.size(), 3u);
+    EXPECT_EQ(p.settings[0], (Setting{"D_cm", 6.0}));
+    EXPECT_EQ(p.settings[2], (Setting{"material.mu", 0.5}));
+    // Every name parameter_names() gives, except unset optionals, in that order.
+    std::vector<std::string> names;
+    for (const auto& q : p.parameters)
+        names.push_back(q.name);
+    std::vector<std::string> expected;
+    for (const auto& n : hopper::config::parameter_names())
+        if (n != "walls.edge_diameter_cm" && n != "fields.end_s" &&
+            n != "material.collision_time_s" && n != "protocol.t_check_s")
+            expected.push_back(n);
+    EXPECT_EQ(names, expected);
+    // Given values as written, choices by name.
+    EXPECT_EQ(find_setting(p.parameters, "D_cm")->value, (SettingValue(6.0)));
+    EXPECT_EQ(find_setting(p.parameters, "hopper.density_kg_m3")->value, (SettingValue(2500.0)));
+    EXPECT_EQ(find_setting(p.parameters, "integrator.scheme")->value,
+              (SettingValue(std::string(to_string(p.scene.integrator.scheme)))));
+    EXPECT_EQ(find_setting(p.parameters, "fields.enabled")->value,
+              (SettingValue(std::string("false"))));
+    // Defaults in file units that convert back to the scene's SI value bit for bit; walls
+    // follow the material.
+    const auto cm_value = [&](const char* n) {
+        return std::get<double>(find_setting(p.parameters, n)->value) * hopper::core::cm;
+    };
+    EXPECT_EQ(cm_value("hopper.thickness_cm"), p.scene.particles.thickness);
+    EXPECT_EQ(cm_value("hopper.d_small_cm"), p.scene.particles.d_small);
+    EXPECT_EQ(cm_value("hopper.width_cm"), p.scene.hopper.width);
+    EXPECT_EQ(find_setting(p.parameters, "walls.mu")->value, (SettingValue(0.5)));
+    EXPECT_EQ(std::get<double>(find_setting(p.parameters, "protocol.shake_direction_deg")->value) *
+                  hopper::core::deg,
+              p.scene.protocol.shake_direction);
 }

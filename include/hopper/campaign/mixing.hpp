@@ -5,6 +5,8 @@
 // same labels shape, different material, and the fits per group would mix them. run_master refuses
 // such a sweep unless RunOptions::allow_mixed (`campaign run --allow-mixed`); the Python analysis
 // (analysis/hopper_store.py) then groups by every setting that differs, read from the scene texts.
+// Points are compared by their typed settings and parameters (store::PointPlan), never by
+// parsing labels or scene texts.
 //
 // (check_compatible in plan.hpp covers points already in the store: their physics must not change.)
 
@@ -16,7 +18,7 @@
 namespace hopper::campaign {
 
 struct MixedSetting {
-    std::string name;                       // scene parameter, e.g. "material.mu"
+    std::string name;                       // scene parameter (sweep-file name), "material.mu"
     std::string sweep_value;                // its value in every point of the sweep ("absent")
     std::vector<std::string> store_values;  // the other values stored points have, sorted
     std::string store_point;                // a stored point with the first of them
@@ -25,8 +27,9 @@ struct MixedSetting {
 // The scene parameters in which a new point of `sweep` (a label not in the store) differs from a
 // stored point although their labels do not tell that difference: the labels' settings other
 // than D are compared, and a differing setting accounts for the parameters of its section
-// (theta_deg for the wall angle; [hopper] also for the particles; [material] also for the walls,
-// which follow it). The outlet D is in every label. Empty for a resume or a subset.
+// (theta_deg for the wall angle; [material] also for the walls, which follow it). The outlet D is
+// in every label. Stored points without parameters (an old store whose sweep text could not be
+// read back: campaign::restore_settings) are not compared. Empty for a resume or a subset.
 std::vector<MixedSetting> mixed_settings(const store::CampaignPlan& stored,
                                          const store::CampaignPlan& sweep);
 

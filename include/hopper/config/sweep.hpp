@@ -24,22 +24,24 @@
 #include <variant>
 #include <vector>
 
+#include "hopper/core/setting.hpp"
 #include "hopper/engine/params.hpp"
 
 namespace hopper::config {
 
-// One varied parameter of a point: its canonical name ("D_cm", "theta_deg", "material.mu",
-// "integrator.scheme", ...) and value (numbers as double, strings for the scheme).
-struct ParamSetting {
-    std::string name;
-    std::variant<double, std::string> value;
-};
-
 struct Point {
-    std::vector<ParamSetting> settings;  // canonical order: D_cm, theta_deg, then by name
-    engine::SceneParams scene;           // the base scene with the settings applied, validated
-    int realizations = 0;                // planned (with a target: max_realizations)
-    std::string label;                   // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
+    // The point's varied settings (what its label shows), canonical order: D_cm, theta_deg,
+    // then by name; numbers as the file wrote them.
+    std::vector<core::Setting> settings;
+    // Every key of the sweep file's scene sections under its canonical name (parameter_names()
+    // order) and in file units: as the file gave it, else the scene's default converted from SI
+    // (the shortest decimal that converts back to the same bits). Unset optionals
+    // (walls.edge_diameter_cm, material.collision_time_s, protocol.t_check_s, fields.end_s) are
+    // left out.
+    std::vector<core::Setting> parameters;
+    engine::SceneParams scene;  // the base scene with the settings applied, validated
+    int realizations = 0;       // planned (with a target: max_realizations)
+    std::string label;          // e.g. "D_cm=2.7 theta_deg=45 material.mu=0.5"
     // With a campaign target: the realizations of the first round (the point's `realizations`
     // as written); 0 without a target.
     int first_round = 0;
@@ -95,13 +97,15 @@ struct Task {
 std::vector<Task> expand_tasks(const CampaignSpec& spec);
 
 // Seed of realization `realization` of a point with the given settings.
-std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<ParamSetting>& settings,
+std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<core::Setting>& settings,
                           int realization);
 
 // Canonical text of one setting, "name=value": numbers in their shortest round-trip form
 // (std::to_chars), strings verbatim, e.g. "D_cm=2.7", "integrator.scheme=verlet". Labels and
 // seeds are built from it.
-std::string to_string(const ParamSetting& setting);
+std::string to_string(const core::Setting& setting);
+// Its value alone, as labels write it ("2.7", "verlet").
+std::string value_text(const core::Setting& setting);
 
 // The canonical names of every scene parameter a [sweep] or [[points]] entry may set, in the
 // order of campaigns/README.md: "D_cm", "theta_deg", then "<section>.<key>" ("hopper.width_cm",

@@ -20,7 +20,11 @@ namespace hopper::store {
 // even when the label is the same.
 struct PointPlan {
     std::string label;  // "D_cm=2.7 theta_deg=45 material.mu=0.5"
-    std::string scene;  // canonical "name=value" lines of every scene parameter (SI units)
+    // Canonical "name=value" lines of every scene parameter (SI units): a physics fingerprint,
+    // hashed and compared, never parsed back into values (`parameters` are for that).
+    std::string scene;
+    // The /points columns D_cm, theta_deg, particles (D and theta through SI and back: 60 may
+    // read 59.99999999999999; the typed settings keep the values as written).
     double D_cm = 0.0;
     double theta_deg = 0.0;
     int particles = 0;
