@@ -4,7 +4,10 @@ not change results (issue 17). Hashes every dataset of the HDF5 view except prov
 timing (/runs, rank, attempt, task and wall seconds, timestamps), in storage order: run the
 campaign with one worker (`--threads 1`) so that the order is the same in both builds.
 
-    /usr/bin/python3 bench/redesign/digests.py STORE.h5   -> one line "sha256  STORE.h5"
+    /usr/bin/python3 bench/redesign/digests.py [--part results|analysis] STORE.h5
+        -> one line "sha256  STORE.h5"
+    results: everything but /analysis (the realizations, points, tasks, fields);
+    analysis: /analysis only (what `campaign analyze` derived); default: both.
 """
 import hashlib
 import sys
@@ -18,7 +21,7 @@ SKIP_NAMES = {"rank", "attempt", "task_seconds", "finished_unix", "time_unix", "
               "seconds_neighbors", "seconds_observers"}
 
 
-def digest(path):
+def digest(path, part="all"):
     h = hashlib.sha256()
     names = []
     with h5py.File(path, "r") as f:
@@ -26,6 +29,9 @@ def digest(path):
         for n in sorted(names):
             full = "/" + n
             if full.startswith(SKIP_GROUPS) or n.rsplit("/", 1)[-1] in SKIP_NAMES:
+                continue
+            in_analysis = full.startswith("/analysis/")
+            if (part == "results" and in_analysis) or (part == "analysis" and not in_analysis):
                 continue
             data = f[full][()]
             h.update(full.encode())
@@ -39,5 +45,9 @@ def digest(path):
 
 
 if __name__ == "__main__":
-    for p in sys.argv[1:]:
-        print(digest(p), p)
+    args = sys.argv[1:]
+    part = "all"
+    if args[:1] == ["--part"]:
+        part, args = args[1], args[2:]
+    for p in args:
+        print(digest(p, part), p)

@@ -14,6 +14,7 @@ for sweep in "$root/campaigns/tiny.toml" "$root/campaigns/quickstart.toml" "$her
     { echo "digests: $name failed (see $out/$name.log)" >&2; exit 1; }
   "$bin" analyze "$name.h5" --json >"$name.json"
   echo "$name store $(/usr/bin/python3 "$here/digests.py" "$name.h5" | cut -d' ' -f1)"
+  echo "$name store-results $(/usr/bin/python3 "$here/digests.py" --part results "$name.h5" | cut -d' ' -f1)"
   echo "$name analyze-json $(sha256sum <"$name.json" | cut -d' ' -f1)"
   # The same JSON parsed and written again (keys sorted): equal when the numbers read back as the
   # same doubles, whatever their formatting.
