@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -213,7 +214,20 @@ TEST(ResultJson, FieldsAsTheirSummary) {
         "t_first": 0.001, "t_last": 0.12, "cells_with_data": 4, "max_mean_speed": 0.75,
         "max_mean_pressure": 12.5})");
     EXPECT_EQ(f, expected) << f.dump();
-    EXPECT_EQ(json.substr(json.size() - 4), "}\n}");  // fields close the object, last
+    const analysis::Json parsed = analysis::Json::parse(json);
+    EXPECT_EQ(std::prev(parsed.end()).key(), "fields");  // the last member
+
+    r.fields->grid.kernel = engine::FieldKernel::gaussian;
+    r.fields->grid.kernel_width = 0.0077;
+    r.fields->windows.assign(6, 0);
+    const std::string gauss = result_json(request, r);
+    EXPECT_NE(gauss.find("\"kernel\": \"gaussian\",\n    \"kernel_width_m\": 0.0077,"),
+              std::string::npos)
+        << gauss;
+    EXPECT_NE(gauss.find("\"cells_with_data\": 0,\n    \"max_mean_speed\": 0,\n    "
+                         "\"max_mean_pressure\": 0\n"),
+              std::string::npos)
+        << gauss;
 }
 
 TEST(Summary, NamesTheKeyQuantities) {
