@@ -122,7 +122,8 @@ void write_inline(std::string& out, const Json& j) {
 }
 
 // `j` at nesting depth `depth` in the layout of result_output.hpp: objects one member per line,
-// arrays of objects one object per line, everything else (and all inside an array) on one line.
+// arrays of objects one object per line, everything else (and all inside an array, and the
+// fields summary) on one line.
 void write_block(std::string& out, const Json& j, int depth) {
     const bool of_objects =
         j.is_array() && !j.empty() &&
@@ -138,7 +139,10 @@ void write_block(std::string& out, const Json& j, int depth) {
         out += indent;
         if (j.is_object()) {
             out += scalar_text(it.key()) + ": ";
-            write_block(out, it.value(), depth + 1);
+            if (depth == 0 && it.key() == "fields")
+                write_inline(out, it.value());  // a summary: one line, as documented
+            else
+                write_block(out, it.value(), depth + 1);
         } else {
             write_inline(out, it.value());
         }

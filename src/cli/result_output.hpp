@@ -8,12 +8,14 @@
 //   empty_time discharge_rate discharge_rate_kg_s steps wall_seconds ns_per_particle_step
 //   diagnostics{every Diagnostics field} discharge_curve{time, in_hopper} exit_times
 //   events[{kind, time, sim_time, in_hopper}]
-//   fields{...} (only when the scene samples fields: a summary, analysis::add_fields_summary in
-//   hopper/analysis/json.hpp; the per-node maps are in a campaign store, see the README)
+//   fields{...} (only when the scene samples fields: a one-line summary,
+//   analysis::add_fields_summary in hopper/analysis/json.hpp; the per-node maps are in a campaign
+//   store, see the README)
 // Built as an analysis::Json (nlohmann) with the analysis layer's number rule (integral values
 // without a fraction, shortest round-trip otherwise); a non-finite number is written as null.
-// Layout: an object outside any array has one member per line; an array sits on one line, except
-// an array of objects, which puts each object (on one line) on its own line.
+// Layout: an object outside any array has one member per line, except the fields summary, which
+// sits on one line; an array sits on one line, except an array of objects, which puts each object
+// (on one line) on its own line.
 // Times in seconds of discharge time (shaking excluded) unless named sim_time. empty_time,
 // discharge_rate and discharge_rate_kg_s are null when the engine has no value for them.
 //
