@@ -20,6 +20,10 @@ Json json_number(double v) {
     return v;
 }
 
+Json json_number_or_null(double v) {
+    return std::isfinite(v) ? json_number(v) : Json(nullptr);
+}
+
 void add_fields_summary(Json& j, const engine::FieldMoments& m) {
     const engine::FieldGrid& g = m.grid;
     j["kernel"] = engine::to_string(g.kernel);

@@ -1,8 +1,11 @@
 #include "cli/result_output.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string_view>
+#include <vector>
 
 #include "hopper/store/result_fields.hpp"
 
@@ -22,61 +25,130 @@ std::string num(double v, int precision = 6) {
     return buf;
 }
 
-// One member as JSON, by its C++ type: numbers, texts and optionals (null when absent) as
-// values, arrays on one line, the diagnostics as an object, the events as an array of one-line
-// objects, the fields as their one-line summary.
-struct JsonMember {
-    JsonWriter& w;
+using analysis::Json;
 
-    void operator()(std::string_view k, engine::Status v) { w.field(k, engine::to_string(v)); }
-    void operator()(std::string_view k, engine::Event::Kind v) { w.field(k, engine::to_string(v)); }
-    template <class T>
-    void operator()(std::string_view k, const std::vector<T>& v) {
-        w.field_array(k, v);
-    }
-    void operator()(std::string_view k, const engine::Diagnostics& d) {
-        w.key(k).begin_object();
-        store::for_each_diagnostic([&](const auto& f) { (*this)(f.name, d.*f.member); });
-        w.end_object();
-    }
-    void operator()(std::string_view k, const std::vector<engine::Event>& events) {
-        w.key(k).begin_array();
-        for (const auto& e : events) {
-            w.begin_object_inline();
-            store::for_each_event_field([&](const auto& f) { (*this)(f.name, e.*f.member); });
-            w.end_object();
-        }
-        w.end_array();
-    }
-    void operator()(std::string_view k, const std::optional<engine::FieldMoments>& m) {
-        if (!m) return;
-        w.key(k).begin_object_inline();
-        write_fields_summary(w, *m);
-        w.end_object();
-    }
-    void operator()(std::string_view, const std::vector<engine::Arch>&) {}  // not in this JSON
-    template <class T>
-    void operator()(std::string_view k, const T& v) {
-        w.field(k, v);
-    }
-};
+// One value as JSON, by its C++ type: numbers (null when not finite), texts and optionals (null
+// when absent), arrays, the diagnostics as an object, the events as an array of objects.
+Json as_json(double v) {
+    return analysis::json_number_or_null(v);
+}
+Json as_json(engine::Status v) {
+    return engine::to_string(v);
+}
+Json as_json(engine::Event::Kind v) {
+    return engine::to_string(v);
+}
+template <class T>
+Json as_json(const T& v) {
+    return v;  // integers, bools and texts as they are
+}
+template <class T>
+Json as_json(const std::optional<T>& v) {
+    return v ? as_json(*v) : Json(nullptr);
+}
+Json as_json(const engine::Diagnostics& d);
+Json as_json(const engine::Event& e);
+template <class T>
+Json as_json(const std::vector<T>& v) {
+    Json a = Json::array();
+    for (const auto& x : v)
+        a.push_back(as_json(static_cast<const T&>(x)));  // vector<bool>'s proxy read as bool
+    return a;
+}
 
-// The member `name` of the result (or of its diagnostics) under the key `key` (default: name).
+Json as_json(const engine::Diagnostics& d) {
+    Json o = Json::object();
+    store::for_each_diagnostic(
+        [&](const auto& f) { o[std::string(f.name)] = as_json(d.*f.member); });
+    return o;
+}
+
+Json as_json(const engine::Event& e) {
+    Json o = Json::object();
+    store::for_each_event_field(
+        [&](const auto& f) { o[std::string(f.name)] = as_json(e.*f.member); });
+    return o;
+}
+
+// The member `name` of the result (or of its diagnostics) into `j` under the key `key` (default:
+// name). The fields go in as their summary, and only when the scene samples them; the arches are
+// not in this JSON.
 struct Members {
-    JsonWriter& w;
+    Json& j;
     const engine::RealizationResult& r;
+
+    template <class T>
+    void put(std::string_view key, const T& v) const {
+        j[std::string(key)] = as_json(v);
+    }
+    void put(std::string_view key, const std::optional<engine::FieldMoments>& m) const {
+        if (!m) return;
+        Json o = Json::object();
+        analysis::add_fields_summary(o, *m);
+        j[std::string(key)] = std::move(o);
+    }
+    void put(std::string_view, const std::vector<engine::Arch>&) const {}
 
     void operator()(std::string_view name, std::string_view key = {}) const {
         store::for_each_result_field([&](const auto& f) {
-            if (f.name == name) JsonMember{w}(key.empty() ? name : key, r.*f.member);
+            if (f.name == name) put(key.empty() ? name : key, r.*f.member);
         });
     }
     void diagnostic(std::string_view name) const {
         store::for_each_diagnostic([&](const auto& f) {
-            if (f.name == name) JsonMember{w}(name, r.diagnostics.*f.member);
+            if (f.name == name) put(name, r.diagnostics.*f.member);
         });
     }
 };
+
+// A scalar, or a key, as JSON text (invalid UTF-8 replaced by U+FFFD, so the text stays JSON).
+std::string scalar_text(const Json& j) {
+    return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+// `j` on one line, members and elements separated by ", ".
+void write_inline(std::string& out, const Json& j) {
+    if (!j.is_structured()) {
+        out += scalar_text(j);
+        return;
+    }
+    out += j.is_object() ? '{' : '[';
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        if (it != j.begin()) out += ", ";
+        if (j.is_object()) out += scalar_text(it.key()) + ": ";
+        write_inline(out, it.value());
+    }
+    out += j.is_object() ? '}' : ']';
+}
+
+// `j` at nesting depth `depth` in the layout of result_output.hpp: objects one member per line,
+// arrays of objects one object per line, everything else (and all inside an array, and the
+// fields summary) on one line.
+void write_block(std::string& out, const Json& j, int depth) {
+    const bool of_objects =
+        j.is_array() && !j.empty() &&
+        std::all_of(j.begin(), j.end(), [](const Json& x) { return x.is_object(); });
+    if (!(j.is_object() || of_objects) || j.empty()) {
+        write_inline(out, j);
+        return;
+    }
+    const std::string indent(static_cast<std::size_t>(2 * (depth + 1)), ' ');
+    out += j.is_object() ? '{' : '[';
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        out += it == j.begin() ? "\n" : ",\n";
+        out += indent;
+        if (j.is_object()) {
+            out += scalar_text(it.key()) + ": ";
+            if (depth == 0 && it.key() == "fields")
+                write_inline(out, it.value());  // a summary: one line, as documented
+            else
+                write_block(out, it.value(), depth + 1);
+        } else {
+            write_inline(out, it.value());
+        }
+    }
+    out += '\n' + indent.substr(2) + (j.is_object() ? '}' : ']');
+}
 
 }  // namespace
 
@@ -88,42 +160,38 @@ bool is_wall_clock_key(std::string_view key) {
 
 // The values come from the result's description (store/result_fields.hpp); what is written
 // here is the JSON's layout: its keys in their documented order (result_output.hpp).
-void write_result_json(JsonWriter& w, const RunRequest& req, const engine::RealizationResult& r) {
-    const Members member{w, r};
-    w.begin_object();
+Json result_object(const RunRequest& req, const engine::RealizationResult& r) {
+    Json j = Json::object();
+    const Members member{j, r};
     member("status");
     member("message");
-    w.field("version", HOPPER_VERSION);
-    w.field("sweep", req.sweep);
-    w.field("D_cm", req.D_cm);
-    w.field("theta_deg", req.theta_deg);
+    j["version"] = HOPPER_VERSION;
+    j["sweep"] = req.sweep;
+    j["D_cm"] = as_json(req.D_cm);
+    j["theta_deg"] = as_json(req.theta_deg);
     for (const char* name : {"seed", "particles", "wall_particles", "discharged", "n_jams",
                              "n_shakes", "n_jams_multi_shake", "survival_times", "censored",
                              "jam_onsets", "shakes_per_jam", "empty_time", "discharge_rate"})
         member(name);
     // The engine reports 0 kg/s when it has no rate; say "no value" the same way as the rate.
-    w.key("discharge_rate_kg_s");
-    if (r.discharge_rate)
-        w.value(r.discharge_rate_mass);
-    else
-        w.null();
+    j["discharge_rate_kg_s"] = r.discharge_rate ? as_json(r.discharge_rate_mass) : Json(nullptr);
     for (const char* name : {"steps", "wall_seconds", "ns_per_particle_step"})
         member.diagnostic(name);
     member("diagnostics");
-    w.key("discharge_curve").begin_object();
-    member("curve_time", "time");
-    member("curve_count", "in_hopper");
-    w.end_object();
+    Json curve = Json::object();
+    Members{curve, r}("curve_time", "time");
+    Members{curve, r}("curve_count", "in_hopper");
+    j["discharge_curve"] = std::move(curve);
     member("exit_times");
     member("events");
     member("fields");  // only when the scene samples fields: otherwise the output is unchanged
-    w.end_object();
+    return j;
 }
 
 std::string result_json(const RunRequest& req, const engine::RealizationResult& r) {
-    JsonWriter w;
-    write_result_json(w, req, r);
-    return w.str();
+    std::string out;
+    write_block(out, result_object(req, r), 0);
+    return out;
 }
 
 void write_summary(std::ostream& os, const RunRequest& req, const engine::RealizationResult& r) {

@@ -8,8 +8,14 @@
 //   empty_time discharge_rate discharge_rate_kg_s steps wall_seconds ns_per_particle_step
 //   diagnostics{every Diagnostics field} discharge_curve{time, in_hopper} exit_times
 //   events[{kind, time, sim_time, in_hopper}]
-//   fields{...} (only when the scene samples fields: a one-line summary, write_fields_summary in
-//   json_writer.hpp; the per-node maps are in a campaign store, see the README)
+//   fields{...} (only when the scene samples fields: a one-line summary,
+//   analysis::add_fields_summary in hopper/analysis/json.hpp; the per-node maps are in a campaign
+//   store, see the README)
+// Built as an analysis::Json (nlohmann) with the analysis layer's number rule (integral values
+// without a fraction, shortest round-trip otherwise); a non-finite number is written as null.
+// Layout: an object outside any array has one member per line, except the fields summary, which
+// sits on one line; an array sits on one line, except an array of objects, which puts each object
+// (on one line) on its own line.
 // Times in seconds of discharge time (shaking excluded) unless named sim_time. empty_time,
 // discharge_rate and discharge_rate_kg_s are null when the engine has no value for them.
 //
@@ -22,8 +28,9 @@
 #include <cstdint>
 #include <ostream>
 #include <string>
+#include <string_view>
 
-#include "cli/json_writer.hpp"
+#include "hopper/analysis/json.hpp"
 #include "hopper/engine/result.hpp"
 
 namespace hopper::cli {
@@ -39,10 +46,10 @@ struct RunRequest {
 // Keys whose values are wall-clock measurements (not reproducible run to run).
 bool is_wall_clock_key(std::string_view key);
 
-// Writes the result object into `w` (as a value: top level, array element, or after a key).
-void write_result_json(JsonWriter& w, const RunRequest& req, const engine::RealizationResult& r);
+// The result object.
+analysis::Json result_object(const RunRequest& req, const engine::RealizationResult& r);
 
-// The whole JSON document (no trailing newline).
+// The whole JSON document in the layout above (no trailing newline).
 std::string result_json(const RunRequest& req, const engine::RealizationResult& r);
 
 // A readable multi-line summary.

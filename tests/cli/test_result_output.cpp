@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -132,6 +133,105 @@ TEST(ResultJson, WallClockFieldsAreIsolatedAndTheRestIsReproducible) {
     EXPECT_EQ(differing, 6);  // wall_seconds, ns_per_particle_step twice; two seconds_*
     EXPECT_TRUE(is_wall_clock_key("seconds_neighbors"));
     EXPECT_FALSE(is_wall_clock_key("settle_time"));
+}
+
+TEST(ResultJson, NumbersFollowTheAnalysisRule) {
+    const std::string json = result_json(request, fabricated());
+    EXPECT_NE(json.find("\n  \"D_cm\": 3,\n"), std::string::npos) << json;  // not 3.0
+    EXPECT_NE(json.find("\n  \"theta_deg\": 60,\n"), std::string::npos);
+    EXPECT_NE(json.find("\n    \"dt\": 1.6e-05,\n"), std::string::npos);
+    EXPECT_NE(json.find(R"("time": [0, 0.01])"), std::string::npos);
+}
+
+TEST(ResultJson, NonFiniteNumbersInArraysAreNull) {
+    RealizationResult r = fabricated();
+    r.survival_times = {std::numeric_limits<double>::quiet_NaN(), 1.5,
+                        -std::numeric_limits<double>::infinity()};
+    const std::string json = result_json(request, r);
+    EXPECT_NE(json.find(R"("survival_times": [null, 1.5, null])"), std::string::npos) << json;
+    EXPECT_EQ(json.find("nan"), std::string::npos);
+    EXPECT_EQ(json.find("inf"), std::string::npos);
+}
+
+TEST(ResultJson, EventsOneObjectPerLineAndEmptyArraysInline) {
+    RealizationResult r = fabricated();
+    r.exit_times.clear();
+    const std::string json = result_json(request, r);
+    EXPECT_NE(json.find("\n  \"events\": [\n    {\"kind\": \"opened\", \"time\": 0, "
+                        "\"sim_time\": 0.3, \"in_hopper\": 100},\n    {\"kind\": \"jam\", "
+                        "\"time\": 0.5, \"sim_time\": 0.8, \"in_hopper\": 60}\n  ]"),
+              std::string::npos)
+        << json;
+    EXPECT_NE(json.find("\n  \"exit_times\": [],\n"), std::string::npos);
+    EXPECT_NE(json.find("\n  \"discharge_curve\": {\n    \"time\": [0, 0.01],\n    "
+                        "\"in_hopper\": [100, 99]\n  },\n"),
+              std::string::npos);
+    EXPECT_EQ(json.find("\"fields\""), std::string::npos);  // no fields sampled: no key
+}
+
+TEST(ResultJson, ParsesBackToTheSameValues) {
+    RealizationResult r = fabricated();
+    const std::string text("tab\tnewline\nquote\" nul\0 end", 27);
+    r.message = text + "\xff";  // \xff: not UTF-8
+    r.survival_times = {0.1, 1.0 / 3.0, 6.02214076e23, 5e-324};
+    const analysis::Json j = analysis::Json::parse(result_json(request, r));
+    EXPECT_EQ(j["message"].get<std::string>(), text + "\xef\xbf\xbd");  // U+FFFD
+    ASSERT_EQ(j["survival_times"].size(), r.survival_times.size());
+    for (std::size_t i = 0; i < r.survival_times.size(); ++i)
+        EXPECT_EQ(j["survival_times"][i].get<double>(), r.survival_times[i]);  // bit for bit
+    EXPECT_EQ(j["censored"], analysis::Json::array({false, true}));
+    EXPECT_EQ(j["seed"].get<std::uint64_t>(), 7u);
+    EXPECT_EQ(j["diagnostics"]["steps"].get<std::int64_t>(), 123456);
+    EXPECT_EQ(j.size(), result_object(request, r).size());
+}
+
+// The fields go in as the analysis layer's summary (analysis::add_fields_summary): nodes without
+// windows do not count.
+TEST(ResultJson, FieldsAsTheirSummary) {
+    engine::FieldGrid g;
+    g.x0 = -0.1;
+    g.y0 = -0.0308;
+    g.cell = 0.0154;
+    g.nx = 3;
+    g.ny = 2;
+    engine::FieldMoments m = engine::FieldMoments::zero(g);
+    m.windows = {0, 4, 1, 0, 2, 7};
+    m.mean[static_cast<int>(engine::Field::speed)] = {9.0, 0.5, 0.25, 8.0, 0.75, 0.125};
+    m.mean[static_cast<int>(engine::Field::pressure)] = {99.0, 3.0, 12.5, 0.0, 1.0, 2.0};
+    m.samples = 120;
+    m.total_windows = 12;
+    m.t_first = 0.001;
+    m.t_last = 0.12;
+    RealizationResult r = fabricated();
+    r.fields = m;
+    const std::string json = result_json(request, r);
+    EXPECT_NE(json.find("\n  \"fields\": {\"kernel\": \"cell\", \"cell_m\": 0.0154, \"x0_m\": "
+                        "-0.1, \"y0_m\": -0.0308, \"nx\": 3, \"ny\": 2, \"samples\": 120, "
+                        "\"total_windows\": 12, \"t_first\": 0.001, \"t_last\": 0.12, "
+                        "\"cells_with_data\": 4, \"max_mean_speed\": 0.75, \"max_mean_pressure\": "
+                        "12.5}\n}"),
+              std::string::npos)
+        << json;
+    const analysis::Json f = analysis::Json::parse(json)["fields"];
+    const analysis::Json expected = analysis::Json::parse(R"({"kernel": "cell", "cell_m": 0.0154,
+        "x0_m": -0.1, "y0_m": -0.0308, "nx": 3, "ny": 2, "samples": 120, "total_windows": 12,
+        "t_first": 0.001, "t_last": 0.12, "cells_with_data": 4, "max_mean_speed": 0.75,
+        "max_mean_pressure": 12.5})");
+    EXPECT_EQ(f, expected) << f.dump();
+    const analysis::Json parsed = analysis::Json::parse(json);
+    EXPECT_EQ(std::prev(parsed.end()).key(), "fields");  // the last member
+
+    r.fields->grid.kernel = engine::FieldKernel::gaussian;
+    r.fields->grid.kernel_width = 0.0077;
+    r.fields->windows.assign(6, 0);
+    const std::string gauss = result_json(request, r);
+    EXPECT_NE(gauss.find("\"kernel\": \"gaussian\", \"kernel_width_m\": 0.0077,"),
+              std::string::npos)
+        << gauss;
+    EXPECT_NE(gauss.find("\"cells_with_data\": 0, \"max_mean_speed\": 0, "
+                         "\"max_mean_pressure\": 0}"),
+              std::string::npos)
+        << gauss;
 }
 
 TEST(Summary, NamesTheKeyQuantities) {

@@ -17,6 +17,10 @@ using Json = nlohmann::ordered_json;
 // Throws std::logic_error for a non-finite value (never written).
 Json json_number(double v);
 
+// The same, but null for a non-finite value (JSON has no NaN or infinity): for reports of one
+// realization (`campaign simulate --json`), where a NaN diagnostic is shown, not fatal.
+Json json_number_or_null(double v);
+
 // The summary of merged fields as JSON members: kernel, kernel_width_m (Gaussian only), cell_m,
 // x0_m, y0_m, nx, ny, samples, total_windows, t_first, t_last, cells_with_data,
 // max_mean_speed, max_mean_pressure.
