@@ -19,7 +19,6 @@ constexpr double gear_c1 = 3.0 / 4.0;
 constexpr double gear_c3 = 1.0 / 2.0;
 constexpr double gear_c4 = 1.0 / 12.0;
 
-
 // Gear predictor on one coordinate (Pascal triangle on the scaled derivatives
 // r_k = dt^k/k! d^k r/dt^k; velocity kept unscaled). Free functions over raw columns so that
 // the compiler sees no aliasing and vectorizes them.
@@ -52,7 +51,6 @@ void gear_correct_axis(std::size_t n, double dt, double g, const double* __restr
         x4[i] += gear_c4 * e;
     }
 }
-
 
 // Velocity Verlet on one coordinate: the half kick v += dt/2 (force inv_mass + g), then, when
 // x is given, the drift x += dt v (x is null for the closing half kick and for rotation).
@@ -340,9 +338,12 @@ std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme) {
 
 std::unique_ptr<System::Kernel> detail::make_kernel(LawKind law, Scheme scheme) {
     switch (law) {
-        case LawKind::frictionless: return make_kernel_for<FrictionlessLaw>(scheme);
-        case LawKind::viscous: return make_kernel_for<ViscousFrictionLaw>(scheme);
-        case LawKind::spring: break;
+        case LawKind::frictionless:
+            return make_kernel_for<FrictionlessLaw>(scheme);
+        case LawKind::viscous:
+            return make_kernel_for<ViscousFrictionLaw>(scheme);
+        case LawKind::spring:
+            break;
     }
     return make_kernel_for<SpringFrictionLaw>(scheme);
 }

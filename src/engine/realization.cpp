@@ -54,7 +54,8 @@ std::string_view to_string(Phase p) {
     return "unknown";
 }
 
-SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants& c, KernelPath kernel) {
+SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants& c,
+                                   KernelPath kernel) {
     SystemConfig sc;
     sc.kernel = kernel;
     sc.dt = c.dt;

@@ -297,10 +297,10 @@ struct Realization::Impl {
 
     bool record_removals() {
         const bool steady = p.protocol.mode == ProtocolMode::steady_state;
-        log_.record(*sys, td, ids, res, steady ? std::function<void(int)>([this](int id) {
-            reinserter.reinsert(id, p, *sys, ids, rng);
-        })
-                                               : std::function<void(int)>());
+        log_.record(*sys, td, ids, res,
+                    steady ? std::function<void(int)>(
+                                 [this](int id) { reinserter.reinsert(id, p, *sys, ids, rng); })
+                           : std::function<void(int)>());
         return true;
     }
 
@@ -331,8 +331,7 @@ struct Realization::Impl {
     }
 
     bool sample_fields() {
-        if (fields.active() && det.flow != Flow::shaking && !ended())
-            fields.sample(p, *sys, td);
+        if (fields.active() && det.flow != Flow::shaking && !ended()) fields.sample(p, *sys, td);
         return true;
     }
 
@@ -391,8 +390,9 @@ struct Realization::Impl {
         res.status = Status::arrested;
         std::ostringstream msg;
         msg << "jam at t = " << res.jam_onsets.back() << " s not cleared after "
-            << shaker.shakes_this_jam << " shake(s) (protocol.max_shakes = "
-            << p.protocol.max_shakes << "); " << sys->mobile_count() << " particles left";
+            << shaker.shakes_this_jam
+            << " shake(s) (protocol.max_shakes = " << p.protocol.max_shakes << "); "
+            << sys->mobile_count() << " particles left";
         res.message = msg.str();
         det.jammed.back().second = td;
         end_run(Event::Kind::stop);
@@ -460,9 +460,9 @@ struct Realization::Impl {
         // removal floor.
         d.potential_energy_released =
             res.diagnostics.potential_energy_released -
-            (sys->potential_energy() + log_.removed_mass() * p.gravity *
-                                           (det.y_outlet -
-                                            p.protocol.exit_depth * p.particles.d_large));
+            (sys->potential_energy() +
+             log_.removed_mass() * p.gravity *
+                 (det.y_outlet - p.protocol.exit_depth * p.particles.d_large));
         return out;
     }
 };

@@ -136,5 +136,4 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
     if (!r.at_end()) StateReader::fail();
 }
 
-
 }  // namespace hopper::engine
