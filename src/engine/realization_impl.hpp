@@ -47,6 +47,9 @@ struct Realization::Impl {
     detail::DischargeLog log_;
     detail::FieldsObserver fields;
     detail::Reinserter reinserter;
+    // What happens to a particle that leaves, chosen once: re-insertion in the steady state,
+    // nothing otherwise (empty).
+    std::function<void(int)> on_exit;
     // Particles that had left (crossed the outlet plane) when the current avalanche began: at
     // the opening, then at each jam's detection.
     int interval_base = 0;
@@ -102,6 +105,8 @@ struct Realization::Impl {
         wall_top = layout.wall_top;
         outline = layout.outline;
         res.diagnostics.potential_energy_released = sys->potential_energy();
+        if (p.protocol.mode == ProtocolMode::steady_state)
+            on_exit = [this](int id) { reinserter.reinsert(id, p, *sys, ids, rng); };
     }
 
     static const SceneParams& checked(const SceneParams& params) {
@@ -296,11 +301,7 @@ struct Realization::Impl {
     }
 
     bool record_removals() {
-        const bool steady = p.protocol.mode == ProtocolMode::steady_state;
-        log_.record(*sys, td, ids, res,
-                    steady ? std::function<void(int)>(
-                                 [this](int id) { reinserter.reinsert(id, p, *sys, ids, rng); })
-                           : std::function<void(int)>());
+        log_.record(*sys, td, ids, res, on_exit);
         return true;
     }
 
