@@ -6,6 +6,7 @@
 //                [--corrections] [--paths] [--lammps RUN_SH [--core C]]
 //
 //   --corrections  integrator.contact_corrections on (docs/accuracy.md)
+//   --skin S  integrator.skin (Verlet skin in units of d_small; default 0.4)
 //   --kernel  force path: auto (default), reference, baseline, avx2, avx512 (same bits)
 //   --paths   every force path this CPU has, compared on one trajectory (CPU time per step)
 //   --lammps  side by side with LAMMPS: ../shared/reference/lammps-hopper/run.sh and this
@@ -57,6 +58,7 @@ double peak_rss_mib() {
 // Set from the command line (--scheme, --delta, --corrections, --kernel).
 Scheme g_scheme = Scheme::gear4;
 double g_delta = 50.0;
+double g_skin = -1.0;  // --skin: integrator.skin (units of d_small); < 0: the default
 bool g_corrections = false;
 KernelPath g_kernel = KernelPath::automatic;
 
@@ -69,6 +71,7 @@ SceneParams full_scene(int particles) {
     p.integrator.steps_per_collision = g_delta;
     p.integrator.scheme = g_scheme;
     p.integrator.contact_corrections = g_corrections;
+    if (g_skin >= 0.0) p.integrator.skin = g_skin;
     return p;
 }
 
@@ -214,6 +217,10 @@ int compare_paths(Realization& run, int repeats, int steps, bool discharge) {
         }
     std::printf("%s: CPU ns per particle-step, median of %d blocks of %d steps per path\n",
                 discharge ? "discharge" : "settled column", repeats, steps);
+    const double np = std::max(1, sys.mobile_count());
+    std::printf("  (per particle: %.2f list entries (mobile %.2f, wall %.2f), %.2f touching)\n",
+                double(sys.pair_count() + sys.wall_pair_count()) / np, sys.pair_count() / np,
+                sys.wall_pair_count() / np, sys.contact_count() / np);
     for (std::size_t k = 0; k < paths.size(); ++k)
         std::printf("  %-10s %7.1f  (x %.2f of reference)\n", to_string(paths[k]).c_str(),
                     median(ns[k]), median(ns[k]) / median(ns[0]));
@@ -355,12 +362,14 @@ int main(int argc, char** argv) {
             g_scheme = next() == "verlet" ? Scheme::verlet : Scheme::gear4;
         else if (arg == "--delta")
             g_delta = std::stod(next());
+        else if (arg == "--skin")
+            g_skin = std::stod(next());
         else if (arg == "--corrections")
             g_corrections = true;
         else {
             std::fprintf(stderr,
                          "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
-                         "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] "
+                         "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] [--skin S] "
                          "[--corrections] [--kernel auto|reference|baseline|avx2|avx512] [--paths] "
                          "[--lammps RUN_SH [--core C]]\n");
             return 2;

@@ -1,12 +1,14 @@
 #pragma once
-// The batched force pass (issue 12): the same forces as the reference loop in system.cpp,
-// computed in three passes so that the arithmetic runs in SIMD registers:
-//   1. touch test (scalar, in list order): the entries of the neighbour list that touch are
-//      packed (their index); springs of the others are reset;
-//   2. the contact law over the packed pairs, branch-free (pair_force.hpp), vectorized by the
-//      compiler for the instruction set the translation unit is built for;
-//   3. accumulation (scalar, in list order): forces and torques are summed in exactly the order
-//      of the reference loop, so every path gives the same bits as the reference.
+// The batched force pass (issue 12): the same forces as the reference loop in kernel.cpp,
+// computed block by block (a few hundred particles at a time, so that the per-entry results stay
+// in the first-level cache) in two passes:
+//   1. the contact law over every entry of the block's neighbour lists, touching or not,
+//      branch-free (pair_force.hpp, Select): a straight loop over list entries that the compiler
+//      vectorizes for the instruction set the translation unit is built for. An entry that does
+//      not touch gets exactly zero force and torque and its spring reset;
+//   2. accumulation (scalar, in list order): forces and torques are summed in exactly the order
+//      of the reference loop. Adding the +0 of an entry that does not touch changes no bit (the
+//      accumulators start at +0 and can never hold -0), so every path gives the reference's bits.
 // force_batch_impl.hpp holds the passes; force_batch_{baseline,avx2,avx512}.cpp compile it once
 // per instruction set, each in its own namespace; force_batch.cpp picks one at run time.
 
@@ -33,13 +35,12 @@ struct ForceArgs {
     ContactParams pp, pw;
     double dt, lever_half;
     const double *pmbar, *wmbar;  // reduced mass per list entry (set at each rebuild)
-    // Scratch with room for every list entry: mobile pairs use [0, pj size), walls after.
-    struct Packed {
-        // Touching list entries, their particle and partner (64-bit: the vectorizer pairs them
-        // with doubles).
-        std::int64_t *entry, *own, *partner;
-        double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per packed pair
-    } mob, wall;
+    const int *po, *wo;           // the particle each list entry belongs to (set at each rebuild)
+    // Scratch of the batched passes: per list entry of one block, force, torque parts, overlap.
+    struct Scratch {
+        double *fx, *fy, *ti, *tj, *ov;
+        int len;  // entries each column has room for
+    } scratch;
 };
 
 struct ForceSums {

@@ -13,54 +13,24 @@
 namespace hopper::engine::detail::HOPPER_FORCE_NS {
 namespace {
 
-// Pass 1 over one kind of partner: packs the list entries that touch (entry, particle and
-// partner indices, in list order) and resets the springs of the others; returns the number packed.
-// Partner columns: mobile (x, y, r) or walls (wx + ox, wy + oy, wr).
-template <bool Wall>
-int pack(const ForceArgs& a, const ForceArgs::Packed& pk) {
-    const int* start = Wall ? a.ws : a.ps;
-    const int* list = Wall ? a.wj : a.pj;
-    double* hx = Wall ? a.gx : a.hx;
-    double* hy = Wall ? a.gy : a.hy;
-    const double* px = Wall ? a.wx : a.x;
-    const double* py = Wall ? a.wy : a.y;
-    const double* pr = Wall ? a.wr : a.r;
-    int m = 0;
-    for (int i = 0; i < a.n; ++i) {
-        const double xi = a.x[i], yi = a.y[i], ri = a.r[i];
-        for (int k = start[i]; k < start[i + 1]; ++k) {
-            const int j = list[k];
-            const double dx = Wall ? xi - (px[j] + a.ox) : xi - px[j];
-            const double dy = Wall ? yi - (py[j] + a.oy) : yi - py[j];
-            const double rj = pr[j], rs = ri + rj;
-            const double d2 = dx * dx + dy * dy;
-            const bool touch = d2 < rs * rs;
-            pk.entry[m] = k;
-            pk.own[m] = i;
-            pk.partner[m] = j;
-            if (hx) {
-                // Not touching: the spring is forgotten.
-                hx[k] = touch ? hx[k] : 0.0;
-                hy[k] = touch ? hy[k] : 0.0;
-            }
-            m += touch ? 1 : 0;
-        }
-    }
-    return m;
-}
+// Particles per block: their list entries' results (5 doubles each, about 3 entries per
+// particle) stay in the first-level cache between the two passes.
+constexpr int block_particles = 256;
 
-// Pass 2: the contact law over m packed pairs (vectorized). Returns the largest overlap.
+// Pass 1 over the list entries [k0, k1) of one kind of partner (mobile or wall): the contact law
+// for every entry, touching or not, branch-free and vectorized. Results go to the scratch at
+// k - k0; springs are updated in place (reset where the pair does not touch). Returns the
+// number of touching entries.
 template <class Law, bool Corr, bool Wall>
-double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
+int evaluate(const ForceArgs& a, int k0, int k1) {
     constexpr bool rot = Law::has_tangential;
     constexpr bool hist = Law::has_history;
     const ContactParams p = Wall ? a.pw : a.pp;
     const double dt = a.dt, lever_half = a.lever_half;
-    const double* __restrict hx = Wall ? a.gx : a.hx;
-    const double* __restrict hy = Wall ? a.gy : a.hy;
-    const std::int64_t* __restrict entry = pk.entry;
-    const std::int64_t* __restrict own = pk.own;
-    const std::int64_t* __restrict partner = pk.partner;
+    double* __restrict hx = Wall ? a.gx : a.hx;
+    double* __restrict hy = Wall ? a.gy : a.hy;
+    const int* __restrict own = Wall ? a.wo : a.po;
+    const int* __restrict partner = Wall ? a.wj : a.pj;
     const double* __restrict mbar = Wall ? a.wmbar : a.pmbar;
     const double* __restrict x = a.x;
     const double* __restrict y = a.y;
@@ -74,18 +44,17 @@ double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
     const double* __restrict svx = a.svx;
     const double* __restrict svy = a.svy;
     const double* __restrict sw = a.sw;
-    double* __restrict ofx = pk.fx;
-    double* __restrict ofy = pk.fy;
-    double* __restrict oti = pk.ti;
-    double* __restrict otj = pk.tj;
-    double* __restrict osx = pk.sx;
-    double* __restrict osy = pk.sy;
-    double* __restrict oov = pk.ov;
+    double* __restrict ofx = a.scratch.fx - k0;
+    double* __restrict ofy = a.scratch.fy - k0;
+    double* __restrict oti = a.scratch.ti - k0;
+    double* __restrict otj = a.scratch.tj - k0;
+    double* __restrict oov = a.scratch.ov - k0;
     const double vwx = a.vwx, vwy = a.vwy, ox = a.ox, oy = a.oy;
-#pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN)
-    for (int t = 0; t < m; ++t) {
-        // Gathered from the columns; separation and radii recomputed exactly as pass 1 did.
-        const std::int64_t k = entry[t], i = own[t], j = partner[t];
+    int touching = 0;
+#pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN) reduction(+ : touching)
+    for (int k = k0; k < k1; ++k) {
+        // The separation and the touch test exactly as the reference loop computes them.
+        const int i = own[k], j = partner[k];
         PairInput q;
         q.dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
         q.dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
@@ -93,6 +62,7 @@ double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
         q.rj = pr[j];
         q.rs = q.ri + q.rj;
         q.d2 = q.dx * q.dx + q.dy * q.dy;
+        const bool touch = !(q.d2 >= q.rs * q.rs);
         q.mbar = mbar[k];
         q.vix = vx[i];
         q.viy = vy[i];
@@ -116,90 +86,110 @@ double evaluate(const ForceArgs& a, const ForceArgs::Packed& pk, int m) {
             sy = hy[k];
         }
         const PairOutput o = pair_force<Law, Corr, true>(p, dt, lever_half, q, sx, sy);
-        ofx[t] = o.fx;
-        ofy[t] = o.fy;
+        // Not touching: no force, and the spring is forgotten (as in the reference loop).
+        ofx[k] = touch ? o.fx : 0.0;
+        ofy[k] = touch ? o.fy : 0.0;
         if constexpr (rot) {
-            oti[t] = o.ti;
-            otj[t] = o.tj;
+            oti[k] = touch ? o.ti : 0.0;
+            otj[k] = touch ? o.tj : 0.0;
         }
         if constexpr (hist) {
-            osx[t] = sx;
-            osy[t] = sy;
+            hx[k] = touch ? sx : 0.0;
+            hy[k] = touch ? sy : 0.0;
         }
-        oov[t] = o.overlap;
+        oov[k] = touch ? o.overlap : 0.0;
+        touching += touch ? 1 : 0;
     }
-    // The largest overlap, in a loop of its own (a floating-point max reduction would keep the
-    // loop above from vectorizing).
-    double max_ov = 0.0;
-    for (int t = 0; t < m; ++t)
-        max_ov = oov[t] > max_ov ? oov[t] : max_ov;
+    return touching;
+}
+
+
+// The largest overlap of [k0, k1), in a loop of its own (a floating-point max reduction would
+// keep the loop above from vectorizing).
+double largest(const ForceArgs& a, int n, double max_ov) {
+    const double* ov = a.scratch.ov;
+    for (int t = 0; t < n; ++t)
+        max_ov = ov[t] > max_ov ? ov[t] : max_ov;
     return max_ov;
 }
 
-// Pass 3: sums in the reference loop's order (per particle: its mobile partners, then its
-// walls; partners' shares as they come) and writes the new springs back to the list.
-template <class Law>
-void accumulate(const ForceArgs& a, int nm, int nw, ForceSums& sums) {
+// Pass 2 for the particles [i0, i1): sums in the reference loop's order (per particle: its
+// mobile partners, then its walls; partners' shares as they come). Entries that do not touch
+// add +0.
+template <class Law, bool Wall>
+void accumulate_mobile(const ForceArgs& a, int i0, int i1, double* fxi, double* fyi,
+                       double* tqi) {
     constexpr bool rot = Law::has_tangential;
-    constexpr bool hist = Law::has_history;
-    const ForceArgs::Packed& pm = a.mob;
-    const ForceArgs::Packed& pw = a.wall;
-    double wfx = 0.0, wfy = 0.0;
-    int t = 0, u = 0;
-    for (int i = 0; i < a.n; ++i) {
-        double fxi = 0.0, fyi = 0.0, tqi = 0.0;
-        for (; t < nm && pm.own[t] == i; ++t) {
-            const std::int64_t j = pm.partner[t];
-            fxi += pm.fx[t];
-            fyi += pm.fy[t];
-            a.fx[j] -= pm.fx[t];
-            a.fy[j] -= pm.fy[t];
+    const int* start = Wall ? a.ws : a.ps;
+    const int k0 = start[i0];
+    const double* sfx = a.scratch.fx - k0;
+    const double* sfy = a.scratch.fy - k0;
+    const double* sti = a.scratch.ti - k0;
+    const double* stj = a.scratch.tj - k0;
+    for (int i = i0; i < i1; ++i) {
+        double fx = 0.0, fy = 0.0, tq = tqi[i - i0];
+        for (int k = start[i]; k < start[i + 1]; ++k) {
+            fx += sfx[k];
+            fy += sfy[k];
+            if constexpr (!Wall) {
+                const int j = a.pj[k];
+                a.fx[j] -= sfx[k];
+                a.fy[j] -= sfy[k];
+            }
             if constexpr (rot) {
-                tqi -= pm.ti[t];
-                a.tq[j] -= pm.tj[t];
-            }
-            if constexpr (hist) {
-                a.hx[pm.entry[t]] = pm.sx[t];
-                a.hy[pm.entry[t]] = pm.sy[t];
+                tq -= sti[k];
+                if constexpr (!Wall) a.tq[a.pj[k]] -= stj[k];
             }
         }
-        double wfxi = 0.0, wfyi = 0.0;
-        for (; u < nw && pw.own[u] == i; ++u) {
-            wfxi += pw.fx[u];
-            wfyi += pw.fy[u];
-            if constexpr (rot) tqi -= pw.ti[u];
-            if constexpr (hist) {
-                a.gx[pw.entry[u]] = pw.sx[u];
-                a.gy[pw.entry[u]] = pw.sy[u];
-            }
-        }
-        a.fx[i] += fxi + wfxi;
-        a.fy[i] += fyi + wfyi;
-        wfx -= wfxi;
-        wfy -= wfyi;
-        if constexpr (rot) a.tq[i] += tqi;
+        fxi[i - i0] = fx;
+        fyi[i - i0] = fy;
+        tqi[i - i0] = tq;
     }
-    sums.wall_fx = wfx;
-    sums.wall_fy = wfy;
 }
 
 template <class Law, bool Corr>
 ForceSums forces(const ForceArgs& a) {
+    constexpr bool rot = Law::has_tangential;
     for (int i = 0; i < a.n; ++i) {
         a.fx[i] = 0.0;
         a.fy[i] = 0.0;
     }
-    if constexpr (Law::has_tangential)
+    if constexpr (rot)
         for (int i = 0; i < a.n; ++i)
             a.tq[i] = 0.0;
-    const int nm = pack<false>(a, a.mob);
-    const int nw = pack<true>(a, a.wall);
-    const double om = evaluate<Law, Corr, false>(a, a.mob, nm);
-    const double ow = evaluate<Law, Corr, true>(a, a.wall, nw);
     ForceSums sums;
-    accumulate<Law>(a, nm, nw, sums);
-    sums.max_overlap = om > ow ? om : ow;
-    sums.contacts = nm + nw;
+    double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
+    int contacts = 0;
+    double fxm[block_particles], fym[block_particles], tqm[block_particles];
+    double fxw[block_particles], fyw[block_particles], tqw[block_particles];
+    for (int i0 = 0; i0 < a.n; i0 += block_particles) {
+        const int i1 = i0 + block_particles < a.n ? i0 + block_particles : a.n;
+        const int bi = i1 - i0;
+        // Mobile partners: evaluate, then sum (the torques from mobile partners start at 0).
+        contacts += evaluate<Law, Corr, false>(a, a.ps[i0], a.ps[i1]);
+        max_ov = largest(a, a.ps[i1] - a.ps[i0], max_ov);
+        for (int t = 0; t < bi; ++t)
+            tqm[t] = 0.0;
+        accumulate_mobile<Law, false>(a, i0, i1, fxm, fym, tqm);
+        // Wall partners: the torque continues from the mobile partners', as in the reference.
+        contacts += evaluate<Law, Corr, true>(a, a.ws[i0], a.ws[i1]);
+        max_ov = largest(a, a.ws[i1] - a.ws[i0], max_ov);
+        for (int t = 0; t < bi; ++t)
+            tqw[t] = tqm[t];
+        accumulate_mobile<Law, true>(a, i0, i1, fxw, fyw, tqw);
+        for (int i = i0; i < i1; ++i) {
+            const int t = i - i0;
+            a.fx[i] += fxm[t] + fxw[t];
+            a.fy[i] += fym[t] + fyw[t];
+            wfx -= fxw[t];
+            wfy -= fyw[t];
+            if constexpr (rot) a.tq[i] += tqw[t];
+        }
+    }
+    sums.max_overlap = max_ov;
+    sums.wall_fx = wfx;
+    sums.wall_fy = wfy;
+    sums.contacts = contacts;
     return sums;
 }
 

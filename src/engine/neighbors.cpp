@@ -217,11 +217,17 @@ void System::pair_constants() {
     const std::size_t n = x_.size();
     pmbar_.resize(pj_.size());
     wmbar_.resize(wj_.size());
+    pown_.resize(pj_.size());
+    wown_.resize(wj_.size());
     for (std::size_t i = 0; i < n; ++i) {
-        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k)
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
             pmbar_[k] = 1.0 / (inv_m_[i] + inv_m_[pj_[k]]);
-        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k)
+            pown_[k] = int(i);
+        }
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
             wmbar_[k] = 1.0 / inv_m_[i];
+            wown_[k] = int(i);
+        }
     }
 }
 

@@ -248,22 +248,15 @@ detail::ForceArgs System::force_args() {
     a.lever_half = config_.contact_lever ? 0.5 : 0.0;
     a.pmbar = pmbar_.data();
     a.wmbar = wmbar_.data();
+    a.po = pown_.data();
+    a.wo = wown_.data();
     if (kernel_path_ != KernelPath::reference) {
-        // Packed-pair scratch: 3 index and 7 double columns, mobile pairs then walls.
-        const std::size_t np = pj_.size(), nw = wj_.size(), len = np + nw;
-        if (pack_i_.size() < 3 * len) pack_i_.resize(3 * len);
-        if (pack_d_.size() < 7 * len) pack_d_.resize(7 * len);
-        auto carve = [&](detail::ForceArgs::Packed& pk, std::size_t off) {
-            double* db = pack_d_.data();
-            pk.entry = pack_i_.data() + off;
-            pk.own = pack_i_.data() + len + off;
-            pk.partner = pack_i_.data() + 2 * len + off;
-            double** cols[] = {&pk.fx, &pk.fy, &pk.ti, &pk.tj, &pk.sx, &pk.sy, &pk.ov};
-            for (std::size_t c = 0; c < 7; ++c)
-                *cols[c] = db + c * len + off;
-        };
-        carve(a.mob, 0);
-        carve(a.wall, np);
+        // Scratch of the batched passes: 5 columns with room for every entry of either list
+        // (a block uses its own entries' part).
+        const std::size_t len = std::max(pj_.size(), wj_.size());
+        if (batch_scratch_.size() < 5 * len) batch_scratch_.resize(5 * len);
+        double* db = batch_scratch_.data();
+        a.scratch = {db, db + len, db + 2 * len, db + 3 * len, db + 4 * len, int(len)};
     }
     return a;
 }

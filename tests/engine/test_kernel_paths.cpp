@@ -124,6 +124,9 @@ std::vector<Case> cases() {
     l.material.lever_arm = LeverArm::contact;
     l.integrator.contact_corrections = true;
     out.push_back({"gear4 corrected, lever arm R - x/2", l});
+    SceneParams o = small_hopper();
+    o.material.slip_rule = SlipRule::spring_only;
+    out.push_back({"gear4, slip rule spring only", o});
     return out;
 }
 

@@ -147,8 +147,11 @@ struct SpringFrictionLaw {
         if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
             const double scale = cap / std::sqrt(ft2);
             const double sfx = ftx * scale, sfy = fty * scale;
-            const double rx = p.slip_spring_only ? -sfx : -(sfx + dx);
-            const double ry = p.slip_spring_only ? -sfy : -(sfy + dy);
+            // spring_only as a factor on the dashpot: an invariant select on a bool keeps GCC
+            // from vectorizing the loops over pairs. 0 * d changes at most the sign of a zero.
+            const double keep = p.slip_spring_only ? 0.0 : 1.0;
+            const double rx = -(sfx + keep * dx);
+            const double ry = -(sfy + keep * dy);
             xx = slip ? rx / p.k_t : xx;
             xy = slip ? ry / p.k_t : xy;
             ftx = slip ? sfx : ftx;

@@ -210,6 +210,8 @@ class System {
     // Reduced mass per list entry, 1 / (1/m_i + 1/m_j) (walls: 1 / (1/m_i)): a per-pair constant
     // set at each rebuild, so that the force pass divides less.
     std::vector<double> pmbar_, wmbar_;
+    // The mobile particle each list entry belongs to (the batched force pass loops over entries).
+    std::vector<int> pown_, wown_;
     // Cell grid for mobile particles (rebuilt with the list) and for walls (when walls change).
     double cell_size_ = 0.0, grid_x0_ = 0.0, grid_y0_ = 0.0;
     int grid_nx_ = 0, grid_ny_ = 0;
@@ -227,10 +229,9 @@ class System {
     // end of the step (for the dashpots); gear4, the mean of the last corrected and the predicted
     // velocities (for the springs).
     std::vector<double> avx_, avy_, aw_;
-    // Batched force pass: the chosen path and its packed-pair scratch (force_batch.hpp).
+    // Batched force pass: the chosen path and its scratch (force_batch.hpp).
     KernelPath kernel_path_ = KernelPath::reference;
-    std::vector<std::int64_t> pack_i_;
-    std::vector<double> pack_d_;
+    std::vector<double> batch_scratch_;
 
     double removal_floor_ = -1e300;
     std::vector<Removal> removals_;
