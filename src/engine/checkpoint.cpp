@@ -257,7 +257,7 @@ void save_result(const RealizationResult& res, StateWriter& w) {
         w.put(e.sim_time);
         w.put(e.in_hopper);
     }
-    w.put(res.diagnostics);  // plain numbers
+    w.put(static_cast<const DiagnosticNumbers&>(res.diagnostics));  // plain numbers
     w.put<std::uint8_t>(res.fields.has_value());
     if (res.fields) save_moments(*res.fields, w);
     // Issue 13: avalanche sizes and arches so far.
@@ -311,7 +311,7 @@ void restore_result(RealizationResult& res, StateReader& r) {
         e.in_hopper = r.get<int>();
         res.events.push_back(e);
     }
-    res.diagnostics = r.get<Diagnostics>();
+    static_cast<DiagnosticNumbers&>(res.diagnostics) = r.get<DiagnosticNumbers>();
     if (r.get<std::uint8_t>()) {
         FieldMoments m;
         restore_moments(m, r);

@@ -455,6 +455,8 @@ struct Realization::Impl {
         d.seconds_forces = sys->phase_seconds().forces;
         d.seconds_integration = sys->phase_seconds().integration;
         d.seconds_neighbors = sys->phase_seconds().neighbors;
+        // (of the last piece, when the realization was resumed from a checkpoint elsewhere)
+        d.force_path = to_string(sys->kernel_path());
         d.seconds_observers = std::max(
             0.0, d.wall_seconds - d.seconds_forces - d.seconds_integration - d.seconds_neighbors);
         // Potential energy released: from the fill to now, removed particles counted at the

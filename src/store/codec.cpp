@@ -225,11 +225,11 @@ struct Encoder {
     }
     void put(const engine::Diagnostics& d) {
         for_each_diagnostic([&](const auto& f) {
-            if (f.placement != Placement::nowhere) put(d.*f.member);
+            if (f.placement != Placement::nowhere && f.since <= version) put(d.*f.member);
         });
     }
     void put(const std::optional<engine::FieldMoments>& v) {
-        if (version == result_codec_version) {
+        if (version >= result_codec_version_science) {
             w.u8(v ? 1 : 0);
             if (v) encode_fields(w, *v);
         } else if (v) {
@@ -293,11 +293,11 @@ struct Decoder {
     }
     void get(engine::Diagnostics& d) {
         for_each_diagnostic([&](const auto& f) {
-            if (f.placement != Placement::nowhere) get(d.*f.member);
+            if (f.placement != Placement::nowhere && f.since <= version) get(d.*f.member);
         });
     }
     void get(std::optional<engine::FieldMoments>& v) {
-        if (version == result_codec_version) {
+        if (version >= result_codec_version_science) {
             const std::uint8_t has_fields = in.u8();
             if (has_fields > 1) in.fail("a fields flag of " + std::to_string(has_fields));
             if (!has_fields) return;
@@ -319,9 +319,10 @@ struct Decoder {
 
 void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
     const bool science = !r.avalanche_sizes.empty() || !r.arches.empty();
-    const std::uint16_t version = science    ? result_codec_version
-                                  : r.fields ? result_codec_version_fields
-                                             : result_codec_version_without_fields;
+    const std::uint16_t version = !r.diagnostics.force_path.empty() ? result_codec_version
+                                  : science   ? result_codec_version_science
+                                  : r.fields  ? result_codec_version_fields
+                                              : result_codec_version_without_fields;
     w.u32(result_magic);
     w.u8(static_cast<std::uint8_t>(version & 0xff));
     w.u8(static_cast<std::uint8_t>(version >> 8));
@@ -362,7 +363,7 @@ engine::RealizationResult decode_result(std::span<const std::uint8_t> bytes,
 
 engine::RealizationResult without_wall_clock(engine::RealizationResult r) {
     for_each_diagnostic([&r](const auto& f) {
-        if (f.wall_clock) r.diagnostics.*f.member = 0;
+        if (f.wall_clock) r.diagnostics.*f.member = {};
     });
     return r;
 }

@@ -151,6 +151,15 @@ assert r['lost_worker_seconds'] > 0.3 and r['saved_worker_seconds'] == 0, r" ||
 #    reference store, extended by 2 realizations per point), without checkpoints: none is
 #    started that the measured durations say cannot end in time. (With checkpoints one that is
 #    longer than the whole allocation starts anyway: it can only finish in pieces.)
+#    The realizations run at delta 200 here (4x the steps of ckpt.toml's; other bits, so they
+#    have their own reference): on a fast machine ckpt.toml's could all end before the stop,
+#    and nothing would be saved.
+sed 's/^steps_per_collision = 50$/steps_per_collision = 200/' "$SWEEP" >slow.toml
+grep -q '^steps_per_collision = 200$' slow.toml || fail "slow.toml: no steps_per_collision line"
+FAST_SWEEP=$SWEEP
+SWEEP=slow.toml
+run_expect 0 slowref $(run_cmd "$WORK/slow_ref.h5")
+digest "$WORK/slow_ref.h5" slow_ref.digest
 STORE=$WORK/d.h5
 t0=$(date +%s.%N)
 run_expect 4 dl $(run_cmd "$STORE" --deadline +2.5 --grace 1)
@@ -168,7 +177,8 @@ assert r['lost_worker_seconds'] == 0 and r['saved_worker_seconds'] > 0, r
 assert json.load(open('dst.out'))['done'] < 4" || fail "deadline run"
 run_expect 0 dfinish $(run_cmd "$STORE")
 digest "$STORE" d.digest
-same_digests ref.digest d.digest
+same_digests slow_ref.digest d.digest
+SWEEP=$FAST_SWEEP
 sed 's/^realizations = 2$/realizations = 4/' "$SWEEP" >more.toml
 run_expect 4 dm "$EXE" run more.toml --store "$WORK/ref.h5" --progress-interval 0 --deadline +1 \
     --grace 0.5 --no-checkpoints

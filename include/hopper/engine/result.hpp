@@ -32,7 +32,8 @@ struct Event {
 
 std::string to_string(Event::Kind k);
 
-struct Diagnostics {
+// The numbers of the diagnostics: a plain block of numbers (a checkpoint copies it as bytes).
+struct DiagnosticNumbers {
     std::int64_t steps = 0;  // all steps (settle + discharge + shaking)
     std::int64_t settle_steps = 0;
     std::int64_t neighbor_rebuilds = 0;
@@ -52,6 +53,13 @@ struct Diagnostics {
     double seconds_integration = 0.0;
     double seconds_neighbors = 0.0;
     double seconds_observers = 0.0;
+};
+
+struct Diagnostics : DiagnosticNumbers {
+    // The force pass that ran (to_string(KernelPath): reference, baseline, avx2, avx512). Every
+    // path gives the same bits; this says which one a node used (issue 12). Set when the
+    // realization ends (not kept in checkpoints: a resumed piece reports its own node's).
+    std::string force_path;
 };
 
 struct RealizationResult {

@@ -52,10 +52,14 @@ std::string hex64(std::uint64_t v);  // 16 lowercase hex digits
 //              (u32 count, one per jam; each: ids i32s, x f64s, y f64s, span f64, max_angle
 //              f64). Written whenever a result has avalanche sizes or arches (every result of
 //              this build that opened the outlet); versions 1 and 2 decode with none.
-// All three versions are read. Decoding the fields checks them before allocating: nx, ny positive,
+//   Version 4 (issue 12): version 3 with the force path (a string) at the end of the
+//              diagnostics. Written whenever a result has one (every result of this build);
+//              versions 1 to 3 decode with none.
+// All four versions are read. Decoding the fields checks them before allocating: nx, ny positive,
 // nx * ny at most max_field_nodes and within the bytes left, every per-node array nx * ny long,
 // every number finite, counts non-negative; otherwise core::StoreError.
-inline constexpr std::uint16_t result_codec_version = 3;
+inline constexpr std::uint16_t result_codec_version = 4;
+inline constexpr std::uint16_t result_codec_version_science = 3;
 inline constexpr std::uint16_t result_codec_version_fields = 2;
 inline constexpr std::uint16_t result_codec_version_without_fields = 1;
 inline constexpr std::int64_t max_field_nodes = 20'000'000;  // the engine refuses larger grids

@@ -107,6 +107,11 @@ constexpr void for_each_diagnostic(V&& v) {
                   "wall-clock time in neighbour search")));
     v(timed(
         field("seconds_observers", &D::seconds_observers, "s", "wall-clock time in observers")));
+    // Issue 12: which machine-dependent code ran, like the timings above (the bits do not depend
+    // on it), so it is left out of the physics digest.
+    v(timed(since(field("force_path", &D::force_path, "",
+                        "force pass that ran: reference, baseline, avx2 or avx512 (same bits)"),
+                  4)));
 }
 
 // Calls v(def) for every member of an Event, in declaration order (the store's columns are
