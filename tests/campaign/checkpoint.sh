@@ -162,10 +162,12 @@ run_expect 0 slowref $(run_cmd "$WORK/slow_ref.h5")
 digest "$WORK/slow_ref.h5" slow_ref.digest
 STORE=$WORK/d.h5
 t0=$(date +%s.%N)
-run_expect 4 dl $(run_cmd "$STORE" --deadline +2.5 --grace 1)
+# (stop at 3 s: mpirun's start can take a second on a loaded machine, and a realization must
+# be running at the stop; these take 3.5-5.5 s each on a quiet core)
+run_expect 4 dl $(run_cmd "$STORE" --deadline +4 --grace 1)
 took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
 # (mpirun's start and end add a second or two on a loaded machine: a bound against hanging)
-awk -v t="$took" 'BEGIN { exit !(t < 8) }' || fail "the deadline run took $took s (deadline 2.5 s)"
+awk -v t="$took" 'BEGIN { exit !(t < 10) }' || fail "the deadline run took $took s (deadline 4 s)"
 expect_in dl.err "nothing of this campaign is measured yet"
 expect_in dl.err "stopped by the deadline"
 run_expect 0 dst "$EXE" status "$STORE" --json
