@@ -9,27 +9,92 @@
 
 #include "force_batch.hpp"
 #include "pair_force.hpp"
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 namespace hopper::engine::detail::HOPPER_FORCE_NS {
 namespace {
 
-// Particles per block: their list entries' results (5 doubles each, about 3 entries per
-// particle) stay in the first-level cache between the two passes.
+// Particles per block: their list entries' scratch (about 3 entries per particle) stays in the
+// first-level cache between the passes.
 constexpr int block_particles = 256;
 
-// Pass 1 over the list entries [k0, k1) of one kind of partner (mobile or wall): the contact law
-// for every entry, touching or not, branch-free and vectorized. Results go to the scratch at
-// k - k0; springs are updated in place (reset where the pair does not touch). Returns the
-// number of touching entries.
+// Pass 1 over the list entries [k0, k1) of one kind of partner (mobile or wall): the touch test
+// (vectorized), exactly as the reference loop computes it; the springs of the entries that do
+// not touch are reset. Then the touching entries are listed in order (branch-free): their list
+// entry and particle. Returns how many touch.
+template <class Law, bool Wall>
+int touching(const ForceArgs& a, int k0, int k1) {
+    const int* __restrict own = Wall ? a.wo : a.po;
+    const int* __restrict partner = Wall ? a.wj : a.pj;
+    const double* __restrict x = a.x;
+    const double* __restrict y = a.y;
+    const double* __restrict r = a.r;
+    const double* __restrict px = Wall ? a.wx : a.x;
+    const double* __restrict py = Wall ? a.wy : a.y;
+    const double* __restrict pr = Wall ? a.wr : a.r;
+    double* __restrict hx = Wall ? a.gx : a.hx;
+    double* __restrict hy = Wall ? a.gy : a.hy;
+    int* __restrict flag = a.scratch.flag - k0;
+    const double ox = a.ox, oy = a.oy;
+#pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN)
+    for (int k = k0; k < k1; ++k) {
+        const int i = own[k], j = partner[k];
+        const double dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
+        const double dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
+        const double rs = r[i] + pr[j];
+        const bool touch = !(dx * dx + dy * dy >= rs * rs);
+        flag[k] = touch ? 1 : 0;
+        if constexpr (Law::has_history) {
+            hx[k] = touch ? hx[k] : 0.0;  // not touching: the spring is forgotten
+            hy[k] = touch ? hy[k] : 0.0;
+        }
+    }
+    int* __restrict entry = a.scratch.entry;
+    int* __restrict owner = a.scratch.owner;
+    int m = 0;
+    int k = k0;
+#if defined(__AVX512F__)
+    // 16 entries at a time: the flags as a mask, the touching ones' indices compressed
+    // (integers only: the bits of the forces do not depend on this).
+    const __m512i step = _mm512_set1_epi32(16);
+    __m512i ks = _mm512_add_epi32(_mm512_set1_epi32(k0),
+                                  _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13,
+                                                    14, 15));
+    for (; k + 16 <= k1; k += 16) {
+        const __mmask16 t = _mm512_test_epi32_mask(_mm512_loadu_si512(flag + k),
+                                                   _mm512_set1_epi32(1));
+        // (compressed in a register and stored whole: a compressing store to memory is slow
+        // on Zen 4; the columns have 16 entries of slack)
+        _mm512_storeu_si512(entry + m, _mm512_maskz_compress_epi32(t, ks));
+        _mm512_storeu_si512(owner + m,
+                            _mm512_maskz_compress_epi32(t, _mm512_loadu_si512(own + k)));
+        m += __builtin_popcount(unsigned(t));
+        ks = _mm512_add_epi32(ks, step);
+    }
+#endif
+    for (; k < k1; ++k) {
+        entry[m] = k;
+        owner[m] = own[k];
+        m += flag[k];
+    }
+    return m;
+}
+
+// Pass 2: the contact law over the m touching entries listed by pass 1, branch-free and
+// vectorized (pair_force, Select). Results (force, torque parts, overlap, new spring) go to the
+// scratch at the same place. Returns the largest overlap.
 template <class Law, bool Corr, bool Wall>
-int evaluate(const ForceArgs& a, int k0, int k1) {
+double evaluate(const ForceArgs& a, int m, double max_ov) {
     constexpr bool rot = Law::has_tangential;
     constexpr bool hist = Law::has_history;
     const ContactParams p = Wall ? a.pw : a.pp;
     const double dt = a.dt, lever_half = a.lever_half;
-    double* __restrict hx = Wall ? a.gx : a.hx;
-    double* __restrict hy = Wall ? a.gy : a.hy;
-    const int* __restrict own = Wall ? a.wo : a.po;
+    const double* __restrict hx = Wall ? a.gx : a.hx;
+    const double* __restrict hy = Wall ? a.gy : a.hy;
+    const int* __restrict entry = a.scratch.entry;
+    const int* __restrict owner = a.scratch.owner;
     const int* __restrict partner = Wall ? a.wj : a.pj;
     const double* __restrict mbar = Wall ? a.wmbar : a.pmbar;
     const double* __restrict x = a.x;
@@ -44,17 +109,18 @@ int evaluate(const ForceArgs& a, int k0, int k1) {
     const double* __restrict svx = a.svx;
     const double* __restrict svy = a.svy;
     const double* __restrict sw = a.sw;
-    double* __restrict ofx = a.scratch.fx - k0;
-    double* __restrict ofy = a.scratch.fy - k0;
-    double* __restrict oti = a.scratch.ti - k0;
-    double* __restrict otj = a.scratch.tj - k0;
-    double* __restrict oov = a.scratch.ov - k0;
+    double* __restrict ofx = a.scratch.fx;
+    double* __restrict ofy = a.scratch.fy;
+    double* __restrict oti = a.scratch.ti;
+    double* __restrict otj = a.scratch.tj;
+    double* __restrict osx = a.scratch.sx;
+    double* __restrict osy = a.scratch.sy;
+    double* __restrict oov = a.scratch.ov;
     const double vwx = a.vwx, vwy = a.vwy, ox = a.ox, oy = a.oy;
-    int touching = 0;
-#pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN) reduction(+ : touching)
-    for (int k = k0; k < k1; ++k) {
-        // The separation and the touch test exactly as the reference loop computes them.
-        const int i = own[k], j = partner[k];
+#pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN)
+    for (int t = 0; t < m; ++t) {
+        // The separation and radii recomputed exactly as pass 1 (and the reference) did.
+        const int k = entry[t], i = owner[t], j = partner[k];
         PairInput q;
         q.dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
         q.dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
@@ -62,7 +128,6 @@ int evaluate(const ForceArgs& a, int k0, int k1) {
         q.rj = pr[j];
         q.rs = q.ri + q.rj;
         q.d2 = q.dx * q.dx + q.dy * q.dy;
-        const bool touch = !(q.d2 >= q.rs * q.rs);
         q.mbar = mbar[k];
         q.vix = vx[i];
         q.viy = vy[i];
@@ -86,64 +151,68 @@ int evaluate(const ForceArgs& a, int k0, int k1) {
             sy = hy[k];
         }
         const PairOutput o = pair_force<Law, Corr, true>(p, dt, lever_half, q, sx, sy);
-        // Not touching: no force, and the spring is forgotten (as in the reference loop).
-        ofx[k] = touch ? o.fx : 0.0;
-        ofy[k] = touch ? o.fy : 0.0;
+        ofx[t] = o.fx;
+        ofy[t] = o.fy;
         if constexpr (rot) {
-            oti[k] = touch ? o.ti : 0.0;
-            otj[k] = touch ? o.tj : 0.0;
+            oti[t] = o.ti;
+            otj[t] = o.tj;
         }
         if constexpr (hist) {
-            hx[k] = touch ? sx : 0.0;
-            hy[k] = touch ? sy : 0.0;
+            osx[t] = sx;
+            osy[t] = sy;
         }
-        oov[k] = touch ? o.overlap : 0.0;
-        touching += touch ? 1 : 0;
+        oov[t] = o.overlap;
     }
-    return touching;
-}
-
-
-// The largest overlap of [k0, k1), in a loop of its own (a floating-point max reduction would
-// keep the loop above from vectorizing).
-double largest(const ForceArgs& a, int n, double max_ov) {
-    const double* ov = a.scratch.ov;
-    for (int t = 0; t < n; ++t)
-        max_ov = ov[t] > max_ov ? ov[t] : max_ov;
+    // The largest overlap, in a loop of its own (a floating-point max reduction would keep the
+    // loop above from vectorizing).
+    for (int t = 0; t < m; ++t)
+        max_ov = oov[t] > max_ov ? oov[t] : max_ov;
     return max_ov;
 }
 
-// Pass 2 for the particles [i0, i1): sums in the reference loop's order (per particle: its
-// mobile partners, then its walls; partners' shares as they come). Entries that do not touch
-// add +0.
+// Pass 3 for the particles [i0, i1): sums the m results in the reference loop's order (per
+// particle: its mobile partners, then its walls; partners' shares as they come) into the
+// block's per-particle sums, and writes the new springs back to the list.
 template <class Law, bool Wall>
-void accumulate_mobile(const ForceArgs& a, int i0, int i1, double* fxi, double* fyi,
-                       double* tqi) {
+void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fxi,
+                double* __restrict fyi, double* __restrict tqi) {
     constexpr bool rot = Law::has_tangential;
-    const int* start = Wall ? a.ws : a.ps;
-    const int k0 = start[i0];
-    const double* sfx = a.scratch.fx - k0;
-    const double* sfy = a.scratch.fy - k0;
-    const double* sti = a.scratch.ti - k0;
-    const double* stj = a.scratch.tj - k0;
+    constexpr bool hist = Law::has_history;
+    const int* __restrict entry = a.scratch.entry;
+    const int* __restrict owner = a.scratch.owner;
+    const int* __restrict partner = a.pj;
+    const double* __restrict sfx = a.scratch.fx;
+    const double* __restrict sfy = a.scratch.fy;
+    const double* __restrict sti = a.scratch.ti;
+    const double* __restrict stj = a.scratch.tj;
+    const double* __restrict ssx = a.scratch.sx;
+    const double* __restrict ssy = a.scratch.sy;
+    double* __restrict hx = Wall ? a.gx : a.hx;
+    double* __restrict hy = Wall ? a.gy : a.hy;
+    double* __restrict fx = a.fx;
+    double* __restrict fy = a.fy;
+    double* __restrict tq = a.tq;
+    int t = 0;
     for (int i = i0; i < i1; ++i) {
-        double fx = 0.0, fy = 0.0, tq = tqi[i - i0];
-        for (int k = start[i]; k < start[i + 1]; ++k) {
-            fx += sfx[k];
-            fy += sfy[k];
+        double sx = 0.0, sy = 0.0, st = tqi[i - i0];
+        for (; t < m && owner[t] == i; ++t) {
+            sx += sfx[t];
+            sy += sfy[t];
             if constexpr (!Wall) {
-                const int j = a.pj[k];
-                a.fx[j] -= sfx[k];
-                a.fy[j] -= sfy[k];
+                const int j = partner[entry[t]];
+                fx[j] -= sfx[t];
+                fy[j] -= sfy[t];
+                if constexpr (rot) tq[j] -= stj[t];
             }
-            if constexpr (rot) {
-                tq -= sti[k];
-                if constexpr (!Wall) a.tq[a.pj[k]] -= stj[k];
+            if constexpr (rot) st -= sti[t];
+            if constexpr (hist) {
+                hx[entry[t]] = ssx[t];
+                hy[entry[t]] = ssy[t];
             }
         }
-        fxi[i - i0] = fx;
-        fyi[i - i0] = fy;
-        tqi[i - i0] = tq;
+        fxi[i - i0] = sx;
+        fyi[i - i0] = sy;
+        tqi[i - i0] = st;
     }
 }
 
@@ -165,18 +234,20 @@ ForceSums forces(const ForceArgs& a) {
     for (int i0 = 0; i0 < a.n; i0 += block_particles) {
         const int i1 = i0 + block_particles < a.n ? i0 + block_particles : a.n;
         const int bi = i1 - i0;
-        // Mobile partners: evaluate, then sum (the torques from mobile partners start at 0).
-        contacts += evaluate<Law, Corr, false>(a, a.ps[i0], a.ps[i1]);
-        max_ov = largest(a, a.ps[i1] - a.ps[i0], max_ov);
+        // Mobile partners (the torques from mobile partners start at 0).
+        int m = touching<Law, false>(a, a.ps[i0], a.ps[i1]);
+        max_ov = evaluate<Law, Corr, false>(a, m, max_ov);
         for (int t = 0; t < bi; ++t)
             tqm[t] = 0.0;
-        accumulate_mobile<Law, false>(a, i0, i1, fxm, fym, tqm);
+        accumulate<Law, false>(a, i0, i1, m, fxm, fym, tqm);
+        contacts += m;
         // Wall partners: the torque continues from the mobile partners', as in the reference.
-        contacts += evaluate<Law, Corr, true>(a, a.ws[i0], a.ws[i1]);
-        max_ov = largest(a, a.ws[i1] - a.ws[i0], max_ov);
+        m = touching<Law, true>(a, a.ws[i0], a.ws[i1]);
+        max_ov = evaluate<Law, Corr, true>(a, m, max_ov);
         for (int t = 0; t < bi; ++t)
             tqw[t] = tqm[t];
-        accumulate_mobile<Law, true>(a, i0, i1, fxw, fyw, tqw);
+        accumulate<Law, true>(a, i0, i1, m, fxw, fyw, tqw);
+        contacts += m;
         for (int i = i0; i < i1; ++i) {
             const int t = i - i0;
             a.fx[i] += fxm[t] + fxw[t];

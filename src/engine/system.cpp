@@ -251,12 +251,17 @@ detail::ForceArgs System::force_args() {
     a.po = pown_.data();
     a.wo = wown_.data();
     if (kernel_path_ != KernelPath::reference) {
-        // Scratch of the batched passes: 5 columns with room for every entry of either list
-        // (a block uses its own entries' part).
-        const std::size_t len = std::max(pj_.size(), wj_.size());
-        if (batch_scratch_.size() < 5 * len) batch_scratch_.resize(5 * len);
+        // Scratch of the batched passes: columns with room for every entry of either list
+        // (a block uses the part of its own entries).
+        const std::size_t len = std::max(pj_.size(), wj_.size()) + 16;  // 16: slack for the
+                                                                          // 16-wide stores
+        if (batch_scratch_.size() < 7 * len) batch_scratch_.resize(7 * len);
+        if (batch_index_.size() < 3 * len) batch_index_.resize(3 * len);
         double* db = batch_scratch_.data();
-        a.scratch = {db, db + len, db + 2 * len, db + 3 * len, db + 4 * len, int(len)};
+        int* ib = batch_index_.data();
+        a.scratch = {ib,          ib + len,    ib + 2 * len, db,          db + len,
+                     db + 2 * len, db + 3 * len, db + 4 * len,  db + 5 * len, db + 6 * len,
+                     int(len)};
     }
     return a;
 }

@@ -232,6 +232,7 @@ class System {
     // Batched force pass: the chosen path and its scratch (force_batch.hpp).
     KernelPath kernel_path_ = KernelPath::reference;
     std::vector<double> batch_scratch_;
+    std::vector<int> batch_index_;
 
     double removal_floor_ = -1e300;
     std::vector<Removal> removals_;
