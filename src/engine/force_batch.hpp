@@ -38,7 +38,7 @@ struct ForceArgs {
     const int *po, *wo;           // the particle each list entry belongs to (set at each rebuild)
     // Scratch of the batched passes: per list entry of one block, force, torque parts, overlap.
     struct Scratch {
-        int *flag, *entry, *owner;                 // touch flags; touching entries, particles
+        int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
         double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per touching entry
         int len;                                   // entries each column has room for
     } scratch;

@@ -53,6 +53,7 @@ int touching(const ForceArgs& a, int k0, int k1) {
     }
     int* __restrict entry = a.scratch.entry;
     int* __restrict owner = a.scratch.owner;
+    int* __restrict other = a.scratch.partner;
     int m = 0;
     int k = k0;
 #if defined(__AVX512F__)
@@ -70,6 +71,8 @@ int touching(const ForceArgs& a, int k0, int k1) {
         _mm512_storeu_si512(entry + m, _mm512_maskz_compress_epi32(t, ks));
         _mm512_storeu_si512(owner + m,
                             _mm512_maskz_compress_epi32(t, _mm512_loadu_si512(own + k)));
+        _mm512_storeu_si512(other + m,
+                            _mm512_maskz_compress_epi32(t, _mm512_loadu_si512(partner + k)));
         m += __builtin_popcount(unsigned(t));
         ks = _mm512_add_epi32(ks, step);
     }
@@ -77,6 +80,7 @@ int touching(const ForceArgs& a, int k0, int k1) {
     for (; k < k1; ++k) {
         entry[m] = k;
         owner[m] = own[k];
+        other[m] = partner[k];
         m += flag[k];
     }
     return m;
@@ -95,7 +99,7 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     const double* __restrict hy = Wall ? a.gy : a.hy;
     const int* __restrict entry = a.scratch.entry;
     const int* __restrict owner = a.scratch.owner;
-    const int* __restrict partner = Wall ? a.wj : a.pj;
+    const int* __restrict partner = a.scratch.partner;
     const double* __restrict mbar = Wall ? a.wmbar : a.pmbar;
     const double* __restrict x = a.x;
     const double* __restrict y = a.y;
@@ -120,7 +124,7 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
 #pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN)
     for (int t = 0; t < m; ++t) {
         // The separation and radii recomputed exactly as pass 1 (and the reference) did.
-        const int k = entry[t], i = owner[t], j = partner[k];
+        const int k = entry[t], i = owner[t], j = partner[t];
         PairInput q;
         q.dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
         q.dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
@@ -180,7 +184,7 @@ void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fx
     constexpr bool hist = Law::has_history;
     const int* __restrict entry = a.scratch.entry;
     const int* __restrict owner = a.scratch.owner;
-    const int* __restrict partner = a.pj;
+    const int* __restrict partner = a.scratch.partner;
     const double* __restrict sfx = a.scratch.fx;
     const double* __restrict sfy = a.scratch.fy;
     const double* __restrict sti = a.scratch.ti;
@@ -199,7 +203,7 @@ void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fx
             sx += sfx[t];
             sy += sfy[t];
             if constexpr (!Wall) {
-                const int j = partner[entry[t]];
+                const int j = partner[t];
                 fx[j] -= sfx[t];
                 fy[j] -= sfy[t];
                 if constexpr (rot) tq[j] -= stj[t];
