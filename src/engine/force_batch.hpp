@@ -1,14 +1,15 @@
 #pragma once
 // The batched force pass (issue 12): the same forces as the reference loop in kernel.cpp,
-// computed block by block (a few hundred particles at a time, so that the per-entry results stay
-// in the first-level cache) in two passes:
-//   1. the contact law over every entry of the block's neighbour lists, touching or not,
-//      branch-free (pair_force.hpp, Select): a straight loop over list entries that the compiler
-//      vectorizes for the instruction set the translation unit is built for. An entry that does
-//      not touch gets exactly zero force and torque and its spring reset;
-//   2. accumulation (scalar, in list order): forces and torques are summed in exactly the order
-//      of the reference loop. Adding the +0 of an entry that does not touch changes no bit (the
-//      accumulators start at +0 and can never hold -0), so every path gives the reference's bits.
+// computed block by block (256 particles at a time, so that the scratch stays in the first-level
+// cache) in three passes per kind of partner (mobile, then wall):
+//   1. the touch test over the block's list entries, vectorized and computed exactly as the
+//      reference loop does; springs of the entries that do not touch are reset; the touching
+//      entries are then listed in order (entry, particle, partner): branch-free, and on AVX-512
+//      16 entries at a time, compressed in registers;
+//   2. the contact law over the touching entries, branch-free (pair_force.hpp, Select), in a
+//      loop the compiler vectorizes for the instruction set the translation unit is built for;
+//   3. accumulation (scalar, in list order): forces and torques summed in exactly the order of
+//      the reference loop, springs written back, so every path gives the reference's bits.
 // force_batch_impl.hpp holds the passes; force_batch_{baseline,avx2,avx512}.cpp compile it once
 // per instruction set, each in its own namespace; force_batch.cpp picks one at run time.
 
@@ -36,7 +37,7 @@ struct ForceArgs {
     double dt, lever_half;
     const double *pmbar, *wmbar;  // reduced mass per list entry (set at each rebuild)
     const int *po, *wo;           // the particle each list entry belongs to (set at each rebuild)
-    // Scratch of the batched passes: per list entry of one block, force, torque parts, overlap.
+    // Scratch of the batched passes, for one block: flags per list entry, then per touching entry.
     struct Scratch {
         int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
         double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per touching entry

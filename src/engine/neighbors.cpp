@@ -163,7 +163,9 @@ void System::build_pairs() {
     pj_.clear();
     wj_.clear();
     const double skin = config_.skin;
-    // Half stencil: own cell (j > i) and four of the eight neighbours.
+    // Half stencil: own cell (j > i) and four of the eight neighbours, all later in cell order;
+    // particles are sorted by cell, so every partner has j > i. The batched force pass relies on
+    // it (force_batch.hpp: a particle's own sum is added after every share it receives).
     static constexpr int sx[4] = {1, -1, 0, 1};
     static constexpr int sy[4] = {0, 1, 1, 1};
     for (std::size_t i = 0; i < n; ++i) {

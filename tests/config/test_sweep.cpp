@@ -153,9 +153,12 @@ TEST(SweepParse, ModellingChoiceKeysLandInTheScene) {
     EXPECT_EQ(d.material.lever_arm, e::LeverArm::radius);
     EXPECT_EQ(d.material.normal_damping, e::NormalDamping::nominal);
     EXPECT_EQ(d.protocol.fill_base, 0.0);
-    EXPECT_FALSE(d.integrator.contact_corrections);
-    EXPECT_TRUE(
-        parse("[integrator]\ncontact_corrections = true\n").base.integrator.contact_corrections);
+    // The default integrator (issue 12): verlet, delta 75, corrections on.
+    EXPECT_EQ(d.integrator.scheme, e::Scheme::verlet);
+    EXPECT_EQ(d.integrator.steps_per_collision, 75.0);
+    EXPECT_TRUE(d.integrator.contact_corrections);
+    EXPECT_FALSE(
+        parse("[integrator]\ncontact_corrections = false\n").base.integrator.contact_corrections);
     EXPECT_THAT(error_of("[integrator]\ncontact_corrections = 1\n"),
                 HasSubstr("integrator.contact_corrections"));
     const SweepFile s = parse(

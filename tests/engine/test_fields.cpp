@@ -178,7 +178,8 @@ SceneParams small_hopper() {
     p.particles.count = 300;
     p.material.collision_time = tau_c;
     // The published integrator setting, pinned: these tests are about the protocol and need
-    // speed, not the accuracy of the default (verlet, delta = 200; README, "Accuracy").
+    // speed, not the accuracy of the default (verlet, delta = 75, corrected; README,
+    // "Accuracy").
     p.integrator.scheme = Scheme::gear4;
     p.integrator.steps_per_collision = 50.0;
     p.protocol.max_time = 20.0;

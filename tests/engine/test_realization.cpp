@@ -22,7 +22,8 @@ SceneParams tiny(double D_cm, double theta_deg = 45.0) {
     p.material.collision_time = 8.0e-4;
     p.protocol.max_time = 30.0;
     // The published integrator setting, pinned: these tests are about the protocol and need
-    // speed, not the accuracy of the default (verlet, delta = 200; README, "Accuracy").
+    // speed, not the accuracy of the default (verlet, delta = 75, corrected; README,
+    // "Accuracy").
     p.integrator.scheme = Scheme::gear4;
     p.integrator.steps_per_collision = 50.0;
     return p;
