@@ -367,11 +367,12 @@ int main(int argc, char** argv) {
         else if (arg == "--corrections")
             g_corrections = true;
         else {
-            std::fprintf(stderr,
-                         "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
-                         "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] [--skin S] "
-                         "[--corrections] [--kernel auto|reference|baseline|avx2|avx512] [--paths] "
-                         "[--lammps RUN_SH [--core C]]\n");
+            std::fprintf(
+                stderr,
+                "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
+                "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] [--skin S] "
+                "[--corrections] [--kernel auto|reference|baseline|avx2|avx512] [--paths] "
+                "[--lammps RUN_SH [--core C]]\n");
             return 2;
         }
     }

@@ -60,17 +60,16 @@ int touching(const ForceArgs& a, int k0, int k1) {
     // 16 entries at a time: the flags as a mask, the touching ones' indices compressed
     // (integers only: the bits of the forces do not depend on this).
     const __m512i step = _mm512_set1_epi32(16);
-    __m512i ks = _mm512_add_epi32(_mm512_set1_epi32(k0),
-                                  _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13,
-                                                    14, 15));
+    __m512i ks =
+        _mm512_add_epi32(_mm512_set1_epi32(k0),
+                         _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
     for (; k + 16 <= k1; k += 16) {
-        const __mmask16 t = _mm512_test_epi32_mask(_mm512_loadu_si512(flag + k),
-                                                   _mm512_set1_epi32(1));
+        const __mmask16 t =
+            _mm512_test_epi32_mask(_mm512_loadu_si512(flag + k), _mm512_set1_epi32(1));
         // (compressed in a register and stored whole: a compressing store to memory is slow
         // on Zen 4; the columns have 16 entries of slack)
         _mm512_storeu_si512(entry + m, _mm512_maskz_compress_epi32(t, ks));
-        _mm512_storeu_si512(owner + m,
-                            _mm512_maskz_compress_epi32(t, _mm512_loadu_si512(own + k)));
+        _mm512_storeu_si512(owner + m, _mm512_maskz_compress_epi32(t, _mm512_loadu_si512(own + k)));
         _mm512_storeu_si512(other + m,
                             _mm512_maskz_compress_epi32(t, _mm512_loadu_si512(partner + k)));
         m += __builtin_popcount(unsigned(t));

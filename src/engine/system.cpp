@@ -254,7 +254,7 @@ detail::ForceArgs System::force_args() {
         // Scratch of the batched passes: columns with room for every entry of either list
         // (a block uses the part of its own entries).
         const std::size_t len = std::max(pj_.size(), wj_.size()) + 16;  // 16: slack for the
-                                                                          // 16-wide stores
+                                                                        // 16-wide stores
         if (batch_scratch_.size() < 7 * len) batch_scratch_.resize(7 * len);
         if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
         double* db = batch_scratch_.data();

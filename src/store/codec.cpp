@@ -320,9 +320,9 @@ struct Decoder {
 void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
     const bool science = !r.avalanche_sizes.empty() || !r.arches.empty();
     const std::uint16_t version = !r.diagnostics.force_path.empty() ? result_codec_version
-                                  : science   ? result_codec_version_science
-                                  : r.fields  ? result_codec_version_fields
-                                              : result_codec_version_without_fields;
+                                  : science                         ? result_codec_version_science
+                                  : r.fields                        ? result_codec_version_fields
+                                             : result_codec_version_without_fields;
     w.u32(result_magic);
     w.u8(static_cast<std::uint8_t>(version & 0xff));
     w.u8(static_cast<std::uint8_t>(version >> 8));

@@ -72,9 +72,9 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     EXPECT_TRUE(changed([](auto& q) { q.gravity = 9.8; }));
     // The modelling choices of issue 11: absent from the text at their defaults (so stores
     // written before them resume), present when set.
-    for (const char* name : {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over",
-                             "slip_rule", "lever_arm", "normal_damping", "fill_base",
-                             "protocol.mode", "jams_per_realization"})
+    for (const char* name :
+         {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over", "slip_rule",
+          "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
     // The contact corrections: in the text when on (the default since issue 12), absent when
     // off, so that stores written before them (off) resume with contact_corrections = false.
