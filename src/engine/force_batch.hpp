@@ -22,10 +22,10 @@
 namespace hopper::engine::detail {
 
 // Everything a force pass reads and writes: raw columns of the System (mobile particles,
-// walls, neighbour list, springs) and scratch space for the packed pairs.
+// walls, neighbour list, springs) and scratch space for the batched passes.
 struct ForceArgs {
     int n = 0;  // mobile particles
-    const double *x, *y, *r, *im;
+    const double *x, *y, *r;
     const double *vx, *vy, *w;     // velocities for the dashpots
     const double *svx, *svy, *sw;  // velocities for the springs (used with the corrections)
     double *fx, *fy, *tq;
@@ -41,7 +41,6 @@ struct ForceArgs {
     struct Scratch {
         int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
         double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per touching entry
-        int len;                                   // entries each column has room for
     } scratch;
 };
 

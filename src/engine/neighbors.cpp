@@ -12,6 +12,21 @@ namespace hopper::engine {
 
 namespace {
 
+// The bounding box of non-empty point columns.
+struct Box {
+    double x0, x1, y0, y1;
+};
+Box bounds(std::span<const double> xs, std::span<const double> ys) {
+    Box b{xs[0], xs[0], ys[0], ys[0]};
+    for (std::size_t k = 0; k < xs.size(); ++k) {
+        b.x0 = std::min(b.x0, xs[k]);
+        b.x1 = std::max(b.x1, xs[k]);
+        b.y0 = std::min(b.y0, ys[k]);
+        b.y1 = std::max(b.y1, ys[k]);
+    }
+    return b;
+}
+
 // Counting sort of points into an nx x ny grid of cells of size cs with origin (x0, y0);
 // points outside are clamped into the border cells (which keeps a neighbour search correct).
 // Afterwards the points of cell c are items[start[c]] .. items[start[c + 1] - 1], in input
@@ -89,13 +104,7 @@ void System::build_wall_grid(double cutoff) {
         walls_changed_ = false;
         return;
     }
-    double x0 = wx_[0], x1 = wx_[0], y0 = wy_[0], y1 = wy_[0];
-    for (std::size_t k = 0; k < nw; ++k) {
-        x0 = std::min(x0, wx_[k]);
-        x1 = std::max(x1, wx_[k]);
-        y0 = std::min(y0, wy_[k]);
-        y1 = std::max(y1, wy_[k]);
-    }
+    const auto [x0, x1, y0, y1] = bounds(wx_, wy_);
     wgrid_x0_ = x0 - cutoff;
     wgrid_y0_ = y0 - cutoff;
     wgrid_nx_ = std::max(1, int(std::ceil((x1 - x0 + 2 * cutoff) / cutoff)));
@@ -115,13 +124,7 @@ void System::permute_by_cell(double cutoff) {
     }
     // Grid over the particles and walls; clamping outliers into the border cells keeps the
     // search correct (clamping never separates two cells' neighbours), only slower for them.
-    double x0 = x_[0], x1 = x_[0], y0 = y_[0], y1 = y_[0];
-    for (std::size_t i = 0; i < n; ++i) {
-        x0 = std::min(x0, x_[i]);
-        x1 = std::max(x1, x_[i]);
-        y0 = std::min(y0, y_[i]);
-        y1 = std::max(y1, y_[i]);
-    }
+    auto [x0, x1, y0, y1] = bounds(x_, y_);
     if (!wx_.empty()) {
         // Keep the grid to the hopper's extent (plus a margin) even if a particle flew away.
         const double m = 4.0 * cutoff;

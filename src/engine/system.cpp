@@ -220,7 +220,6 @@ detail::ForceArgs System::force_args() {
     a.x = x_.data();
     a.y = y_.data();
     a.r = r_.data();
-    a.im = inv_m_.data();
     a.vx = a.svx = vx_.data();
     a.vy = a.svy = vy_.data();
     a.w = a.sw = w_.data();
@@ -259,9 +258,8 @@ detail::ForceArgs System::force_args() {
         if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
         double* db = batch_scratch_.data();
         int* ib = batch_index_.data();
-        a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len,
-                     db,           db + len,     db + 2 * len, db + 3 * len,
-                     db + 4 * len, db + 5 * len, db + 6 * len, int(len)};
+        a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len, db,          db + len,
+                     db + 2 * len, db + 3 * len, db + 4 * len, db + 5 * len, db + 6 * len};
     }
     return a;
 }
