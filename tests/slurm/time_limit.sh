@@ -1,7 +1,9 @@
 #!/bin/bash
 # The whole path on a real time limit: tiny.toml (70-80 s of work for one worker) is submitted
 # with --time 1 (one minute) and --signal-lead 30, so that the first allocation must be stopped by
-# Slurm (the pre-limit SIGUSR1, or the SIGTERM at the limit) and resubmit itself, until the
+# Slurm (the pre-limit SIGUSR1, or the SIGTERM at the limit) or by its own deadline (submit's
+# default --deadline slurm-(LEAD-GRACE) stops running realizations exactly when the SIGUSR1 is
+# due, so either may come first) and resubmit itself, until the
 # campaign is complete. The store must then equal an uninterrupted run's, realization by
 # realization (the reference runs meanwhile, outside Slurm, on the other core).
 source "$(dirname "$0")/lib.sh"
@@ -25,7 +27,6 @@ allocations=$(grep -c "start on" "$LOG")
 resubmits=$(grep -c "resubmitted as job" "$LOG")
 [ "$allocations" -ge 2 ] && [ "$resubmits" -eq $((allocations - 1)) ] ||
     fail "$allocations allocation(s), $resubmits resubmission(s): expected at least one of each"
-grep -qE "allocation 1: got SIG(USR1|TERM)" "$LOG" || fail "allocation 1 was not signalled"
 "$DIGEST" "$WORK/ref.h5" >ref.digest || fail "store_digest ref.h5"
 "$DIGEST" "$STORE" >limit.digest || fail "store_digest limit.h5"
 [ "$(wc -l <ref.digest)" -eq 405 ] || fail "the reference has $(wc -l <ref.digest) realizations"
@@ -38,7 +39,9 @@ n = int(sys.argv[2])
 assert s["done"] == s["total"] == 405 and s["pending"] == 0, s
 runs = s["runs"]
 assert len(runs) == n, (len(runs), n)
-assert all(r["end_reason"].startswith("interrupted by SIG") for r in runs[:-1]), runs
+# Every allocation but the last was stopped: by Slurm's signal or by its own deadline.
+stops = ("interrupted by SIGUSR1", "interrupted by SIGTERM", "interrupted by the deadline")
+assert all(r["end_reason"] in stops for r in runs[:-1]), runs
 assert runs[-1]["end_reason"] == "complete" or "interrupted" not in runs[-1]["end_reason"], runs[-1]
 print("runs:", [(r["end_reason"], r["stored"]) for r in runs])
 PY
