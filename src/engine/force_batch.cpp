@@ -51,10 +51,10 @@ bool kernel_available(KernelPath p) {
 KernelPath resolve_kernel(KernelPath wanted) {
     // automatic: the AVX-512 batched pass where the CPU has it, else the reference loop.
     // Measured on this project's machines (AMD EPYC, Zen 4: `bench_engine --paths`,
-    // docs/performance.md): AVX-512 takes about 0.9x the reference's time per particle-step;
-    // the AVX2 and baseline builds of the batched pass take 1.2x and 1.4x (they evaluate every
-    // list entry, touching or not, in 4 or 2 lanes), so they are not chosen. All give the same
-    // bits, so the choice never changes a result.
+    // docs/performance.md): AVX-512 takes about 0.8x the reference's time per particle-step;
+    // the AVX2 and baseline builds of the batched pass take 1.0-1.1x (no compressing
+    // instruction, and 4 or 2 lanes), so they are not chosen. All give the same bits, so the
+    // choice never changes a result.
     if (wanted == KernelPath::automatic)
         return kernel_available(KernelPath::avx512) ? KernelPath::avx512 : KernelPath::reference;
     if (!kernel_available(wanted))

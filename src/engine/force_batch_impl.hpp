@@ -112,10 +112,7 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     const double* __restrict svx = a.svx;
     const double* __restrict svy = a.svy;
     const double* __restrict sw = a.sw;
-    double* __restrict ofx = a.scratch.fx;
-    double* __restrict ofy = a.scratch.fy;
-    double* __restrict oti = a.scratch.ti;
-    double* __restrict otj = a.scratch.tj;
+    double* __restrict of4 = a.scratch.f4;
     double* __restrict osx = a.scratch.sx;
     double* __restrict osy = a.scratch.sy;
     double* __restrict oov = a.scratch.ov;
@@ -154,12 +151,11 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
             sy = hy[k];
         }
         const PairOutput o = pair_force<Law, Corr, true>(p, dt, lever_half, q, sx, sy);
-        ofx[t] = o.fx;
-        ofy[t] = o.fy;
-        if constexpr (rot) {
-            oti[t] = o.ti;
-            otj[t] = o.tj;
-        }
+        // (-t_i: the particle's own torque then adds it, and s + (-t) is exactly s - t)
+        of4[4 * t] = o.fx;
+        of4[4 * t + 1] = o.fy;
+        of4[4 * t + 2] = rot ? o.tj : 0.0;
+        of4[4 * t + 3] = rot ? -o.ti : 0.0;
         if constexpr (hist) {
             osx[t] = sx;
             osy[t] = sy;
@@ -173,62 +169,59 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     return max_ov;
 }
 
+// Four doubles: one 32-byte load, add or store (element by element, so each lane gets exactly
+// the bits of the scalar operation). Moved with memcpy: the columns are 8-byte aligned.
+typedef double Lanes4 __attribute__((vector_size(32)));
+
 // Pass 3 for the particles [i0, i1): sums the m results in the reference loop's order (per
 // particle: its mobile partners, then its walls; partners' shares as they come) into the
-// block's per-particle sums, and writes the new springs back to the list.
+// block's per-particle sums, and writes the new springs back to the list. Each touching pair's
+// (F_x, F_y, t_j, -t_i) is added to its particle's running sum (lanes 0, 1 and 3 are used) and
+// subtracted from its partner's share in scratch.acc (lanes 0, 1 and 2 are used).
 template <class Law, bool Wall>
 void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fxi,
                 double* __restrict fyi, double* __restrict tqi) {
-    constexpr bool rot = Law::has_tangential;
     constexpr bool hist = Law::has_history;
     const int* __restrict entry = a.scratch.entry;
     const int* __restrict owner = a.scratch.owner;
     const int* __restrict partner = a.scratch.partner;
-    const double* __restrict sfx = a.scratch.fx;
-    const double* __restrict sfy = a.scratch.fy;
-    const double* __restrict sti = a.scratch.ti;
-    const double* __restrict stj = a.scratch.tj;
+    const double* __restrict f4 = a.scratch.f4;
     const double* __restrict ssx = a.scratch.sx;
     const double* __restrict ssy = a.scratch.sy;
     double* __restrict hx = Wall ? a.gx : a.hx;
     double* __restrict hy = Wall ? a.gy : a.hy;
-    double* __restrict fx = a.fx;
-    double* __restrict fy = a.fy;
-    double* __restrict tq = a.tq;
+    double* __restrict acc = a.scratch.acc;
     int t = 0;
     for (int i = i0; i < i1; ++i) {
-        double sx = 0.0, sy = 0.0, st = tqi[i - i0];
+        Lanes4 own = {0.0, 0.0, 0.0, tqi[i - i0]};
         for (; t < m && owner[t] == i; ++t) {
-            sx += sfx[t];
-            sy += sfy[t];
+            Lanes4 c;
+            __builtin_memcpy(&c, f4 + 4 * t, sizeof c);
+            own += c;
             if constexpr (!Wall) {
-                const int j = partner[t];
-                fx[j] -= sfx[t];
-                fy[j] -= sfy[t];
-                if constexpr (rot) tq[j] -= stj[t];
+                double* pj = acc + 4 * partner[t];
+                Lanes4 share;
+                __builtin_memcpy(&share, pj, sizeof share);
+                share -= c;
+                __builtin_memcpy(pj, &share, sizeof share);
             }
-            if constexpr (rot) st -= sti[t];
             if constexpr (hist) {
                 hx[entry[t]] = ssx[t];
                 hy[entry[t]] = ssy[t];
             }
         }
-        fxi[i - i0] = sx;
-        fyi[i - i0] = sy;
-        tqi[i - i0] = st;
+        fxi[i - i0] = own[0];
+        fyi[i - i0] = own[1];
+        tqi[i - i0] = own[3];
     }
 }
 
 template <class Law, bool Corr>
 ForceSums forces(const ForceArgs& a) {
     constexpr bool rot = Law::has_tangential;
-    for (int i = 0; i < a.n; ++i) {
-        a.fx[i] = 0.0;
-        a.fy[i] = 0.0;
-    }
-    if constexpr (rot)
-        for (int i = 0; i < a.n; ++i)
-            a.tq[i] = 0.0;
+    double* __restrict acc = a.scratch.acc;
+    for (int i = 0; i < 4 * a.n; ++i)
+        acc[i] = 0.0;
     ForceSums sums;
     double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
     int contacts = 0;
@@ -253,11 +246,12 @@ ForceSums forces(const ForceArgs& a) {
         contacts += m;
         for (int i = i0; i < i1; ++i) {
             const int t = i - i0;
-            a.fx[i] += fxm[t] + fxw[t];
-            a.fy[i] += fym[t] + fyw[t];
+            // (every partner of i has a smaller index: its share in acc is complete)
+            a.fx[i] = acc[4 * i] + (fxm[t] + fxw[t]);
+            a.fy[i] = acc[4 * i + 1] + (fym[t] + fyw[t]);
             wfx -= fxw[t];
             wfy -= fyw[t];
-            if constexpr (rot) a.tq[i] += tqw[t];
+            if constexpr (rot) a.tq[i] = acc[4 * i + 2] + tqw[t];
         }
     }
     sums.max_overlap = max_ov;
