@@ -46,6 +46,7 @@ struct ForceArgs {
         // Per mobile particle, interleaved (x, y, torque, unused): the partners' shares, summed
         // in list order (one 32-byte read-modify-write per touching pair, not three).
         double* acc;
+        double* xyr4;  // per mobile particle, interleaved (x, y, r, unused): AVX-512 touch test
     } scratch;
 };
 
