@@ -39,14 +39,8 @@ struct ForceArgs {
     const int *po, *wo;           // the particle each list entry belongs to (set at each rebuild)
     // Scratch of the batched passes, for one block: flags per list entry, then per touching entry.
     struct Scratch {
-        int *flag, *entry, *owner, *partner;  // touch flags; touching entries, particles
-        // Per touching entry: the force and torque parts interleaved, (F_x, F_y, t_j, -t_i) (one
-        // 32-byte load in the accumulation), the new spring and the overlap.
-        double *f4, *sx, *sy, *ov;
-        // Per mobile particle, interleaved (x, y, torque, unused): the partners' shares, summed
-        // in list order (one 32-byte read-modify-write per touching pair, not three).
-        double* acc;
-        double* xyr4;  // per mobile particle, interleaved (x, y, r, unused): AVX-512 touch test
+        int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
+        double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per touching entry
     } scratch;
 };
 

@@ -85,83 +85,6 @@ int touching(const ForceArgs& a, int k0, int k1) {
     return m;
 }
 
-#if defined(__AVX512F__)
-// The x, y and r of 8 particles from their interleaved rows (x, y, r, unused) in xyr4: one
-// 32-byte load per particle and 11 shuffles, where 24 single loads each need a shuffle of their
-// own. (Copies of the columns' values: the bits are the columns'.)
-HOPPER_HOT_INLINE void gather_xyr(const double* xyr4, const int* idx, __m512d& x, __m512d& y,
-                                  __m512d& r) {
-    const auto row = [&](int l) { return _mm256_loadu_pd(xyr4 + 4 * idx[l]); };
-    const auto pair = [&](int l) {
-        return _mm512_insertf64x4(_mm512_zextpd256_pd512(row(l)), row(l + 1), 1);
-    };
-    const __m512d p0 = pair(0), p1 = pair(2), p2 = pair(4), p3 = pair(6);
-    // p0 = x0 y0 r0 . x1 y1 r1 .; lo = x0 x2 r0 r2 x1 x3 r1 r3; hi = y0 y2 . . y1 y3 . .
-    const __m512d lo01 = _mm512_unpacklo_pd(p0, p1), hi01 = _mm512_unpackhi_pd(p0, p1);
-    const __m512d lo23 = _mm512_unpacklo_pd(p2, p3), hi23 = _mm512_unpackhi_pd(p2, p3);
-    const __m512i first = _mm512_setr_epi64(0, 4, 1, 5, 8, 12, 9, 13);
-    const __m512i third = _mm512_setr_epi64(2, 6, 3, 7, 10, 14, 11, 15);
-    x = _mm512_permutex2var_pd(lo01, first, lo23);
-    y = _mm512_permutex2var_pd(hi01, first, hi23);
-    r = _mm512_permutex2var_pd(lo01, third, lo23);
-}
-
-// Pass 1 for mobile partners on AVX-512: the same touch test (same operations, so the same
-// decisions), on positions and radii gathered from interleaved rows, 8 entries at a time, the
-// mask used directly for the springs' reset and the compaction.
-template <class Law>
-int touching_mobile_avx512(const ForceArgs& a, int k0, int k1) {
-    const int* __restrict own = a.po;
-    const int* __restrict partner = a.pj;
-    const double* __restrict xyr4 = a.scratch.xyr4;
-    double* __restrict hx = a.hx;
-    double* __restrict hy = a.hy;
-    int* __restrict entry = a.scratch.entry;
-    int* __restrict owner = a.scratch.owner;
-    int* __restrict other = a.scratch.partner;
-    int m = 0;
-    int k = k0;
-    __m256i ks = _mm256_add_epi32(_mm256_set1_epi32(k0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    for (; k + 8 <= k1; k += 8) {
-        __m512d xi, yi, ri, xj, yj, rj;
-        gather_xyr(xyr4, own + k, xi, yi, ri);
-        gather_xyr(xyr4, partner + k, xj, yj, rj);
-        const __m512d dx = _mm512_sub_pd(xi, xj), dy = _mm512_sub_pd(yi, yj);
-        const __m512d rs = _mm512_add_pd(ri, rj);
-        const __m512d d2 = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
-        // touch = !(d2 >= rs^2): "not greater or equal", true when unordered
-        const __mmask8 t = _mm512_cmp_pd_mask(d2, _mm512_mul_pd(rs, rs), _CMP_NGE_UQ);
-        if constexpr (Law::has_history) {
-            _mm512_storeu_pd(hx + k, _mm512_maskz_mov_pd(t, _mm512_loadu_pd(hx + k)));
-            _mm512_storeu_pd(hy + k, _mm512_maskz_mov_pd(t, _mm512_loadu_pd(hy + k)));
-        }
-        // (compressed in a register and stored whole; the columns have 16 entries of slack)
-        const __m256i ko = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + k));
-        const __m256i kp = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(partner + k));
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(entry + m), _mm256_maskz_compress_epi32(t, ks));
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(owner + m), _mm256_maskz_compress_epi32(t, ko));
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(other + m), _mm256_maskz_compress_epi32(t, kp));
-        m += __builtin_popcount(unsigned(t));
-        ks = _mm256_add_epi32(ks, _mm256_set1_epi32(8));
-    }
-    for (; k < k1; ++k) {  // the last few entries, one at a time, the same operations
-        const int i = own[k], j = partner[k];
-        const double dx = xyr4[4 * i] - xyr4[4 * j], dy = xyr4[4 * i + 1] - xyr4[4 * j + 1];
-        const double rs = xyr4[4 * i + 2] + xyr4[4 * j + 2];
-        const bool touch = !(dx * dx + dy * dy >= rs * rs);
-        if constexpr (Law::has_history) {
-            hx[k] = touch ? hx[k] : 0.0;
-            hy[k] = touch ? hy[k] : 0.0;
-        }
-        entry[m] = k;
-        owner[m] = i;
-        other[m] = j;
-        m += touch ? 1 : 0;
-    }
-    return m;
-}
-#endif
-
 // Pass 2: the contact law over the m touching entries listed by pass 1, branch-free and
 // vectorized (pair_force, Select). Results (force, torque parts, overlap, new spring) go to the
 // scratch at the same place. Returns the largest overlap.
@@ -189,7 +112,10 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     const double* __restrict svx = a.svx;
     const double* __restrict svy = a.svy;
     const double* __restrict sw = a.sw;
-    double* __restrict of4 = a.scratch.f4;
+    double* __restrict ofx = a.scratch.fx;
+    double* __restrict ofy = a.scratch.fy;
+    double* __restrict oti = a.scratch.ti;
+    double* __restrict otj = a.scratch.tj;
     double* __restrict osx = a.scratch.sx;
     double* __restrict osy = a.scratch.sy;
     double* __restrict oov = a.scratch.ov;
@@ -228,11 +154,12 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
             sy = hy[k];
         }
         const PairOutput o = pair_force<Law, Corr, true>(p, dt, lever_half, q, sx, sy);
-        // (-t_i: the particle's own torque then adds it, and s + (-t) is exactly s - t)
-        of4[4 * t] = o.fx;
-        of4[4 * t + 1] = o.fy;
-        of4[4 * t + 2] = rot ? o.tj : 0.0;
-        of4[4 * t + 3] = rot ? -o.ti : 0.0;
+        ofx[t] = o.fx;
+        ofy[t] = o.fy;
+        if constexpr (rot) {
+            oti[t] = o.ti;
+            otj[t] = o.tj;
+        }
         if constexpr (hist) {
             osx[t] = sx;
             osy[t] = sy;
@@ -246,69 +173,62 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     return max_ov;
 }
 
-// Four doubles: one 32-byte load, add or store (element by element, so each lane gets exactly
-// the bits of the scalar operation). Moved with memcpy: the columns are 8-byte aligned.
-typedef double Lanes4 __attribute__((vector_size(32)));
-
 // Pass 3 for the particles [i0, i1): sums the m results in the reference loop's order (per
 // particle: its mobile partners, then its walls; partners' shares as they come) into the
-// block's per-particle sums, and writes the new springs back to the list. Each touching pair's
-// (F_x, F_y, t_j, -t_i) is added to its particle's running sum (lanes 0, 1 and 3 are used) and
-// subtracted from its partner's share in scratch.acc (lanes 0, 1 and 2 are used).
+// block's per-particle sums, and writes the new springs back to the list.
 template <class Law, bool Wall>
 void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fxi,
                 double* __restrict fyi, double* __restrict tqi) {
+    constexpr bool rot = Law::has_tangential;
     constexpr bool hist = Law::has_history;
     const int* __restrict entry = a.scratch.entry;
     const int* __restrict owner = a.scratch.owner;
     const int* __restrict partner = a.scratch.partner;
-    const double* __restrict f4 = a.scratch.f4;
+    const double* __restrict sfx = a.scratch.fx;
+    const double* __restrict sfy = a.scratch.fy;
+    const double* __restrict sti = a.scratch.ti;
+    const double* __restrict stj = a.scratch.tj;
     const double* __restrict ssx = a.scratch.sx;
     const double* __restrict ssy = a.scratch.sy;
     double* __restrict hx = Wall ? a.gx : a.hx;
     double* __restrict hy = Wall ? a.gy : a.hy;
-    double* __restrict acc = a.scratch.acc;
+    double* __restrict fx = a.fx;
+    double* __restrict fy = a.fy;
+    double* __restrict tq = a.tq;
     int t = 0;
     for (int i = i0; i < i1; ++i) {
-        Lanes4 own = {0.0, 0.0, 0.0, tqi[i - i0]};
+        double sx = 0.0, sy = 0.0, st = tqi[i - i0];
         for (; t < m && owner[t] == i; ++t) {
-            Lanes4 c;
-            __builtin_memcpy(&c, f4 + 4 * t, sizeof c);
-            own += c;
+            sx += sfx[t];
+            sy += sfy[t];
             if constexpr (!Wall) {
-                double* pj = acc + 4 * partner[t];
-                Lanes4 share;
-                __builtin_memcpy(&share, pj, sizeof share);
-                share -= c;
-                __builtin_memcpy(pj, &share, sizeof share);
+                const int j = partner[t];
+                fx[j] -= sfx[t];
+                fy[j] -= sfy[t];
+                if constexpr (rot) tq[j] -= stj[t];
             }
+            if constexpr (rot) st -= sti[t];
             if constexpr (hist) {
                 hx[entry[t]] = ssx[t];
                 hy[entry[t]] = ssy[t];
             }
         }
-        fxi[i - i0] = own[0];
-        fyi[i - i0] = own[1];
-        tqi[i - i0] = own[3];
+        fxi[i - i0] = sx;
+        fyi[i - i0] = sy;
+        tqi[i - i0] = st;
     }
 }
 
 template <class Law, bool Corr>
 ForceSums forces(const ForceArgs& a) {
     constexpr bool rot = Law::has_tangential;
-    double* __restrict acc = a.scratch.acc;
-    for (int i = 0; i < 4 * a.n; ++i)
-        acc[i] = 0.0;
-#if defined(__AVX512F__)
-    // The positions and radii as interleaved rows, for the touch test's gathers.
-    double* __restrict xyr4 = a.scratch.xyr4;
     for (int i = 0; i < a.n; ++i) {
-        xyr4[4 * i] = a.x[i];
-        xyr4[4 * i + 1] = a.y[i];
-        xyr4[4 * i + 2] = a.r[i];
-        xyr4[4 * i + 3] = 0.0;
+        a.fx[i] = 0.0;
+        a.fy[i] = 0.0;
     }
-#endif
+    if constexpr (rot)
+        for (int i = 0; i < a.n; ++i)
+            a.tq[i] = 0.0;
     ForceSums sums;
     double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
     int contacts = 0;
@@ -318,11 +238,7 @@ ForceSums forces(const ForceArgs& a) {
         const int i1 = i0 + block_particles < a.n ? i0 + block_particles : a.n;
         const int bi = i1 - i0;
         // Mobile partners (the torques from mobile partners start at 0).
-#if defined(__AVX512F__)
-        int m = touching_mobile_avx512<Law>(a, a.ps[i0], a.ps[i1]);
-#else
         int m = touching<Law, false>(a, a.ps[i0], a.ps[i1]);
-#endif
         max_ov = evaluate<Law, Corr, false>(a, m, max_ov);
         for (int t = 0; t < bi; ++t)
             tqm[t] = 0.0;
@@ -337,12 +253,11 @@ ForceSums forces(const ForceArgs& a) {
         contacts += m;
         for (int i = i0; i < i1; ++i) {
             const int t = i - i0;
-            // (every partner of i has a smaller index: its share in acc is complete)
-            a.fx[i] = acc[4 * i] + (fxm[t] + fxw[t]);
-            a.fy[i] = acc[4 * i + 1] + (fym[t] + fyw[t]);
+            a.fx[i] += fxm[t] + fxw[t];
+            a.fy[i] += fym[t] + fyw[t];
             wfx -= fxw[t];
             wfy -= fyw[t];
-            if constexpr (rot) a.tq[i] = acc[4 * i + 2] + tqw[t];
+            if constexpr (rot) a.tq[i] += tqw[t];
         }
     }
     sums.max_overlap = max_ov;

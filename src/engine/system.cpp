@@ -254,14 +254,12 @@ detail::ForceArgs System::force_args() {
         // (a block uses the part of its own entries).
         const std::size_t len = std::max(pj_.size(), wj_.size()) + 16;  // 16: slack for the
                                                                         // 16-wide stores
-        const std::size_t need = 7 * len + 8 * x_.size();
-        if (batch_scratch_.size() < need) batch_scratch_.resize(need);
+        if (batch_scratch_.size() < 7 * len) batch_scratch_.resize(7 * len);
         if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
         double* db = batch_scratch_.data();
         int* ib = batch_index_.data();
-        a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len, db,
-                     db + 4 * len, db + 5 * len, db + 6 * len, db + 7 * len,
-                     db + 7 * len + 4 * x_.size()};
+        a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len, db,          db + len,
+                     db + 2 * len, db + 3 * len, db + 4 * len, db + 5 * len, db + 6 * len};
     }
     return a;
 }
