@@ -33,24 +33,37 @@ constexpr double gear_c4 = 1.0 / 12.0;
 // Gear predictor on one coordinate (Pascal triangle on the scaled derivatives
 // r_k = dt^k/k! d^k r/dt^k; velocity kept unscaled). Free functions over raw columns so that
 // the compiler sees no aliasing and vectorizes them. x may be null (rotation: the angle itself
-// is not tracked).
+// is not tracked); mean, when given, gets 0.5 (predicted v + last v) (the springs' velocity
+// with the contact corrections), in the same pass.
+template <bool X, bool Mean>
+[[gnu::always_inline]] inline void gear_predict_loop(std::size_t n, double dt,
+                                                     double* __restrict x, double* __restrict v,
+                                                     double* __restrict x2, double* __restrict x3,
+                                                     const double* __restrict x4,
+                                                     double* __restrict mean) {
+    const double inv_dt = 1.0 / dt;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double v0 = v[i];
+        if constexpr (X) x[i] += dt * v[i] + x2[i] + x3[i] + x4[i];
+        v[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
+        x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
+        x3[i] += 4.0 * x4[i];
+        if constexpr (Mean) mean[i] = 0.5 * (v[i] + v0);
+    }
+}
+
 HOPPER_ISA_CLONES
 void gear_predict_axis(std::size_t n, double dt, double* __restrict x, double* __restrict v,
-                       double* __restrict x2, double* __restrict x3, const double* __restrict x4) {
-    const double inv_dt = 1.0 / dt;
-    if (x)
-        for (std::size_t i = 0; i < n; ++i) {
-            x[i] += dt * v[i] + x2[i] + x3[i] + x4[i];
-            v[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
-            x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
-            x3[i] += 4.0 * x4[i];
-        }
+                       double* __restrict x2, double* __restrict x3, const double* __restrict x4,
+                       double* __restrict mean) {
+    if (x && mean)
+        gear_predict_loop<true, true>(n, dt, x, v, x2, x3, x4, mean);
+    else if (x)
+        gear_predict_loop<true, false>(n, dt, x, v, x2, x3, x4, mean);
+    else if (mean)
+        gear_predict_loop<false, true>(n, dt, x, v, x2, x3, x4, mean);
     else
-        for (std::size_t i = 0; i < n; ++i) {
-            v[i] += (2.0 * x2[i] + 3.0 * x3[i] + 4.0 * x4[i]) * inv_dt;
-            x2[i] += 3.0 * x3[i] + 6.0 * x4[i];
-            x3[i] += 4.0 * x4[i];
-        }
+        gear_predict_loop<false, false>(n, dt, x, v, x2, x3, x4, mean);
 }
 
 // Gear corrector on one coordinate: e = dt^2/2 a(t+dt) - predicted r_2, with
@@ -81,20 +94,36 @@ void gear_correct_axis(std::size_t n, double dt, double g, const double* __restr
 }
 
 // Velocity Verlet on one coordinate: the half kick v += dt/2 (force inv_mass + g), then, when
-// x is given, the drift x += dt v (x is null for the closing half kick and for rotation).
+// x is given, the drift x += dt v (x is null for the closing half kick and for rotation); out,
+// when given, gets the kicked v extrapolated by another half kick, v + dt/2 (force inv_mass + g)
+// (the dashpots' velocity with the contact corrections), in the same pass.
+template <bool X, bool Out>
+[[gnu::always_inline]] inline void verlet_loop(std::size_t n, double dt, double g,
+                                               const double* __restrict force,
+                                               const double* __restrict inv_mass,
+                                               double* __restrict v, double* __restrict x,
+                                               double* __restrict out) {
+    const double hdt = 0.5 * dt;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double kick = hdt * (force[i] * inv_mass[i] + g);
+        v[i] += kick;
+        if constexpr (X) x[i] += dt * v[i];
+        if constexpr (Out) out[i] = v[i] + kick;
+    }
+}
+
 HOPPER_ISA_CLONES
 void verlet_axis(std::size_t n, double dt, double g, const double* __restrict force,
-                 const double* __restrict inv_mass, double* __restrict v, double* __restrict x) {
-    const double hdt = 0.5 * dt;
-    if (x) {
-        for (std::size_t i = 0; i < n; ++i) {
-            v[i] += hdt * (force[i] * inv_mass[i] + g);
-            x[i] += dt * v[i];
-        }
-    } else {
-        for (std::size_t i = 0; i < n; ++i)
-            v[i] += hdt * (force[i] * inv_mass[i] + g);
-    }
+                 const double* __restrict inv_mass, double* __restrict v, double* __restrict x,
+                 double* __restrict out = nullptr) {
+    if (x && out)
+        verlet_loop<true, true>(n, dt, g, force, inv_mass, v, x, out);
+    else if (x)
+        verlet_loop<true, false>(n, dt, g, force, inv_mass, v, x, out);
+    else if (out)
+        verlet_loop<false, true>(n, dt, g, force, inv_mass, v, x, out);
+    else
+        verlet_loop<false, false>(n, dt, g, force, inv_mass, v, x, out);
 }
 
 // Largest squared displacement since the last rebuild; NaN if any position is not finite.
@@ -115,23 +144,6 @@ double max_displacement2(std::size_t n, const double* __restrict x, const double
     return bad ? std::numeric_limits<double>::quiet_NaN() : maxd2;
 }
 
-// Corrections, gear4: mean = 0.5 (v + saved), written over saved.
-HOPPER_ISA_CLONES
-void mean_into(std::size_t n, const double* __restrict v, double* __restrict saved) {
-    for (std::size_t i = 0; i < n; ++i)
-        saved[i] = 0.5 * (v[i] + saved[i]);
-}
-
-// Corrections, verlet: out = v + dt/2 (force inv_mass + g).
-HOPPER_ISA_CLONES
-void extrapolate(std::size_t n, double dt, double g, const double* __restrict force,
-                 const double* __restrict inv_mass, const double* __restrict v,
-                 double* __restrict out) {
-    const double hdt = 0.5 * dt;
-    for (std::size_t i = 0; i < n; ++i)
-        out[i] = v[i] + hdt * (force[i] * inv_mass[i] + g);
-}
-
 }  // namespace
 
 template <class Law, Scheme S>
@@ -144,44 +156,38 @@ struct KernelImpl final : System::Kernel {
         const double dt = s.config_.dt;
         const bool corr = s.config_.contact_corrections;
         if constexpr (S == Scheme::gear4) {
-            // Corrections: the springs grow with the mean of the last corrected velocity
-            // (saved here) and the predicted one.
-            if (corr && hist) {
-                s.avx_ = s.vx_;
-                s.avy_ = s.vy_;
-                s.aw_ = s.w_;
+            // Corrections: the springs grow with the mean of the last corrected velocity and
+            // the predicted one.
+            const bool mean = corr && hist;
+            if (mean) {
+                s.avx_.resize(n);
+                s.avy_.resize(n);
+                s.aw_.resize(n);
             }
             gear_predict_axis(n, dt, s.x_.data(), s.vx_.data(), s.x2_.data(), s.x3_.data(),
-                              s.x4_.data());
+                              s.x4_.data(), mean ? s.avx_.data() : nullptr);
             gear_predict_axis(n, dt, s.y_.data(), s.vy_.data(), s.y2_.data(), s.y3_.data(),
-                              s.y4_.data());
+                              s.y4_.data(), mean ? s.avy_.data() : nullptr);
             if constexpr (rot)  // the angle is not tracked: omega and its derivatives only
                 gear_predict_axis(n, dt, nullptr, s.w_.data(), s.w2_.data(), s.w3_.data(),
-                                  s.w4_.data());
-            if (corr && hist) {
-                mean_into(n, s.vx_.data(), s.avx_.data());
-                mean_into(n, s.vy_.data(), s.avy_.data());
-                mean_into(n, s.w_.data(), s.aw_.data());
-            }
+                                  s.w4_.data(), mean ? s.aw_.data() : nullptr);
         } else {
-            // Velocity Verlet: half kick with the last forces, then drift.
+            // Velocity Verlet: half kick with the last forces, then drift. Corrections: the
+            // dashpots see the velocity extrapolated to the end of the step with the last
+            // forces, v + dt/2 (F/m + g).
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.x_.data());
-            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data());
-            if constexpr (rot)
-                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr);
-            // Corrections: the dashpots see the velocity extrapolated to the end of the step
-            // with the last forces, v + dt/2 (F/m + g).
             if (corr) {
                 s.avx_.resize(n);
                 s.avy_.resize(n);
                 s.aw_.resize(n);
-                extrapolate(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.avx_.data());
-                extrapolate(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.avy_.data());
-                if constexpr (rot)
-                    extrapolate(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(),
-                                s.aw_.data());
             }
+            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.x_.data(),
+                        corr ? s.avx_.data() : nullptr);
+            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data(),
+                        corr ? s.avy_.data() : nullptr);
+            if constexpr (rot)
+                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr,
+                            corr ? s.aw_.data() : nullptr);
         }
         return max_displacement2(n, s.x_.data(), s.y_.data(), s.xref_.data(), s.yref_.data());
     }
