@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "force_batch.hpp"
 #include "pair_force.hpp"
@@ -30,15 +31,34 @@ constexpr double gear_c4 = 1.0 / 12.0;
 #define HOPPER_ISA_CLONES
 #endif
 
+// Calls f with two std::bool_constant arguments equal to a and b: one loop compiled per case,
+// the choice made once, outside the loop. Always inlined, like the loop bodies it calls
+// (HOPPER_LOOP_BODY), so that each multi-versioned caller compiles them for its own
+// instruction set.
+#define HOPPER_LOOP_BODY __attribute__((always_inline))
+template <class F>
+[[gnu::always_inline]] inline void with_flags(bool a, bool b, F&& f) {
+    using T = std::true_type;
+    using N = std::false_type;
+    if (a && b)
+        f(T{}, T{});
+    else if (a)
+        f(T{}, N{});
+    else if (b)
+        f(N{}, T{});
+    else
+        f(N{}, N{});
+}
+
 // Gear predictor on one coordinate (Pascal triangle on the scaled derivatives
 // r_k = dt^k/k! d^k r/dt^k; velocity kept unscaled). Free functions over raw columns so that
 // the compiler sees no aliasing and vectorizes them. x may be null (rotation: the angle itself
 // is not tracked); mean, when given, gets 0.5 (predicted v + last v) (the springs' velocity
 // with the contact corrections), in the same pass.
 template <bool X, bool Mean>
-[[gnu::always_inline]] inline void gear_predict_loop(std::size_t n, double dt,
-                                                     double* __restrict x, double* __restrict v,
-                                                     double* __restrict x2, double* __restrict x3,
+[[gnu::always_inline]] inline void gear_predict_loop(std::size_t n, double dt, double* __restrict x,
+                                                     double* __restrict v, double* __restrict x2,
+                                                     double* __restrict x3,
                                                      const double* __restrict x4,
                                                      double* __restrict mean) {
     const double inv_dt = 1.0 / dt;
@@ -56,14 +76,9 @@ HOPPER_ISA_CLONES
 void gear_predict_axis(std::size_t n, double dt, double* __restrict x, double* __restrict v,
                        double* __restrict x2, double* __restrict x3, const double* __restrict x4,
                        double* __restrict mean) {
-    if (x && mean)
-        gear_predict_loop<true, true>(n, dt, x, v, x2, x3, x4, mean);
-    else if (x)
-        gear_predict_loop<true, false>(n, dt, x, v, x2, x3, x4, mean);
-    else if (mean)
-        gear_predict_loop<false, true>(n, dt, x, v, x2, x3, x4, mean);
-    else
-        gear_predict_loop<false, false>(n, dt, x, v, x2, x3, x4, mean);
+    with_flags(x != nullptr, mean != nullptr, [&](auto X, auto M) HOPPER_LOOP_BODY {
+        gear_predict_loop<X(), M()>(n, dt, x, v, x2, x3, x4, mean);
+    });
 }
 
 // Gear corrector on one coordinate: e = dt^2/2 a(t+dt) - predicted r_2, with
@@ -116,14 +131,9 @@ HOPPER_ISA_CLONES
 void verlet_axis(std::size_t n, double dt, double g, const double* __restrict force,
                  const double* __restrict inv_mass, double* __restrict v, double* __restrict x,
                  double* __restrict out = nullptr) {
-    if (x && out)
-        verlet_loop<true, true>(n, dt, g, force, inv_mass, v, x, out);
-    else if (x)
-        verlet_loop<true, false>(n, dt, g, force, inv_mass, v, x, out);
-    else if (out)
-        verlet_loop<false, true>(n, dt, g, force, inv_mass, v, x, out);
-    else
-        verlet_loop<false, false>(n, dt, g, force, inv_mass, v, x, out);
+    with_flags(x != nullptr, out != nullptr, [&](auto X, auto O) HOPPER_LOOP_BODY {
+        verlet_loop<X(), O()>(n, dt, g, force, inv_mass, v, x, out);
+    });
 }
 
 // Largest squared displacement since the last rebuild; NaN if any position is not finite.
