@@ -12,9 +12,7 @@
 #include "cli/submit.hpp"
 #include "hopper/core/error.hpp"
 
-#ifndef HOPPER_VERSION
-#define HOPPER_VERSION "unknown"
-#endif
+#include "hopper_version.h"  // HOPPER_VERSION, generated at build time (version.cmake)
 
 namespace hopper::cli {
 

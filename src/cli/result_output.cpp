@@ -9,9 +9,7 @@
 
 #include "hopper/store/result_fields.hpp"
 
-#ifndef HOPPER_VERSION
-#define HOPPER_VERSION "unknown"
-#endif
+#include "hopper_version.h"  // HOPPER_VERSION, generated at build time (version.cmake)
 
 namespace hopper::cli {
 

@@ -16,9 +16,7 @@
 #include "hopper/core/error.hpp"
 #include "hopper/store/records.hpp"
 
-#ifndef HOPPER_VERSION
-#define HOPPER_VERSION "unknown"
-#endif
+#include "hopper_version.h"  // HOPPER_VERSION, generated at build time (version.cmake)
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
