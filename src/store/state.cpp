@@ -96,7 +96,7 @@ bool State::apply(const RunStartRecord& r) {
             changed = true;
         }
     }
-    runs.push_back(RunSummary{r.run, std::nullopt, 0});
+    runs.push_back(RunSummary{r.run, std::nullopt, 0, {}});
     return changed;
 }
 
