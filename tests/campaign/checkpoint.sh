@@ -7,7 +7,8 @@
 #     refuses it with the reason and restarts that realization; the other continues from its
 #     state. Every realization ends identical to an uninterrupted run, and the files are gone.
 #  3. SIGKILL of the whole job (no chance to save at the stop) with --checkpoint-interval 0.3:
-#     the periodic states let the rerun continue; results identical again.
+#     the periodic states let the rerun continue; results identical again (delta-200
+#     realizations, long enough to be still running at the kill on a fast machine).
 #  4. A checkpoint of this sweep put beside a store of other physics under the same labels is
 #     refused ("other physics") and the realization restarts.
 #  5. --no-checkpoints: the same SIGTERM throws the running realizations' worker time away, and
@@ -110,7 +111,18 @@ if [ "$n" -ge 2 ]; then expect_in rerun.err "realization(s) continued from a che
 digest "$STORE" c.digest
 same_digests ref.digest c.digest
 
-# 3. SIGKILL with periodic checkpoints: the rerun continues from them.
+# Slow realizations for the cases that need one still running after a second or more (3 and
+# 6): delta 200, 4x the steps of ckpt.toml's (other bits, so they have their own reference).
+# On a fast machine ckpt.toml's can end, and their checkpoints be removed, before the stop.
+sed 's/^steps_per_collision = 50$/steps_per_collision = 200/' "$SWEEP" >slow.toml
+grep -q '^steps_per_collision = 200$' slow.toml || fail "slow.toml: no steps_per_collision line"
+FAST_SWEEP=$SWEEP
+SWEEP=slow.toml
+run_expect 0 slowref $(run_cmd "$WORK/slow_ref.h5")
+digest "$WORK/slow_ref.h5" slow_ref.digest
+
+# 3. SIGKILL with periodic checkpoints: the rerun continues from them (slow realizations:
+# 3.5-5.5 s each on a quiet core, so the one seen running for 1 s is still running at the kill).
 STORE=$WORK/k.h5
 : >job.err
 start_job $(run_cmd "$STORE" --checkpoint-interval 0.3)
@@ -122,7 +134,8 @@ kill_job KILL
 run_expect 0 krerun $(run_cmd "$STORE")
 expect_in krerun.err "realization(s) continued from a checkpoint"
 digest "$STORE" k.digest
-same_digests ref.digest k.digest
+same_digests slow_ref.digest k.digest
+SWEEP=$FAST_SWEEP
 
 # 4. Other physics under the same labels: refused, restarted.
 STORE=$WORK/p.h5
@@ -154,12 +167,8 @@ assert r['lost_worker_seconds'] > 0.3 and r['saved_worker_seconds'] == 0, r" ||
 #    The realizations run at delta 200 here (4x the steps of ckpt.toml's; other bits, so they
 #    have their own reference): on a fast machine ckpt.toml's could all end before the stop,
 #    and nothing would be saved.
-sed 's/^steps_per_collision = 50$/steps_per_collision = 200/' "$SWEEP" >slow.toml
-grep -q '^steps_per_collision = 200$' slow.toml || fail "slow.toml: no steps_per_collision line"
 FAST_SWEEP=$SWEEP
 SWEEP=slow.toml
-run_expect 0 slowref $(run_cmd "$WORK/slow_ref.h5")
-digest "$WORK/slow_ref.h5" slow_ref.digest
 STORE=$WORK/d.h5
 t0=$(date +%s.%N)
 # (stop at 3 s: mpirun's start can take a second on a loaded machine, and a realization must
