@@ -83,29 +83,33 @@ void gear_predict_axis(std::size_t n, double dt, double* __restrict x, double* _
 
 // Gear corrector on one coordinate: e = dt^2/2 a(t+dt) - predicted r_2, with
 // a = force * inv_mass + g. x may be null (rotation). One pass over the columns.
+template <bool X>
+[[gnu::always_inline]] inline void gear_correct_loop(std::size_t n, double dt, double g,
+                                                     const double* __restrict force,
+                                                     const double* __restrict inv_mass,
+                                                     double* __restrict x, double* __restrict v,
+                                                     double* __restrict x2, double* __restrict x3,
+                                                     double* __restrict x4) {
+    const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
+        if constexpr (X) x[i] += gear_c0 * e;
+        v[i] += gear_c1 * e * inv_dt;
+        x2[i] += e;
+        x3[i] += gear_c3 * e;
+        x4[i] += gear_c4 * e;
+    }
+}
+
 HOPPER_ISA_CLONES
 void gear_correct_axis(std::size_t n, double dt, double g, const double* __restrict force,
                        const double* __restrict inv_mass, double* __restrict x,
                        double* __restrict v, double* __restrict x2, double* __restrict x3,
                        double* __restrict x4) {
-    const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
     if (x)
-        for (std::size_t i = 0; i < n; ++i) {
-            const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
-            x[i] += gear_c0 * e;
-            v[i] += gear_c1 * e * inv_dt;
-            x2[i] += e;
-            x3[i] += gear_c3 * e;
-            x4[i] += gear_c4 * e;
-        }
+        gear_correct_loop<true>(n, dt, g, force, inv_mass, x, v, x2, x3, x4);
     else
-        for (std::size_t i = 0; i < n; ++i) {
-            const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
-            v[i] += gear_c1 * e * inv_dt;
-            x2[i] += e;
-            x3[i] += gear_c3 * e;
-            x4[i] += gear_c4 * e;
-        }
+        gear_correct_loop<false>(n, dt, g, force, inv_mass, x, v, x2, x3, x4);
 }
 
 // Velocity Verlet on one coordinate: the half kick v += dt/2 (force inv_mass + g), then, when
@@ -165,39 +169,34 @@ struct KernelImpl final : System::Kernel {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
         const bool corr = s.config_.contact_corrections;
+        // The contact corrections' second velocity set (see velocity_sets), written by the
+        // integrator's own pass: verlet's dashpots see the velocity extrapolated to the end of
+        // the step with the last forces, v + dt/2 (F/m + g); gear4's springs grow with the mean
+        // of the last corrected and the predicted velocity (only where there are springs).
+        const bool second = corr && (S == Scheme::verlet || hist);
+        if (second) {
+            s.avx_.resize(n);
+            s.avy_.resize(n);
+            s.aw_.resize(n);
+        }
+        double* const avx = second ? s.avx_.data() : nullptr;
+        double* const avy = second ? s.avy_.data() : nullptr;
+        double* const aw = second ? s.aw_.data() : nullptr;
         if constexpr (S == Scheme::gear4) {
-            // Corrections: the springs grow with the mean of the last corrected velocity and
-            // the predicted one.
-            const bool mean = corr && hist;
-            if (mean) {
-                s.avx_.resize(n);
-                s.avy_.resize(n);
-                s.aw_.resize(n);
-            }
             gear_predict_axis(n, dt, s.x_.data(), s.vx_.data(), s.x2_.data(), s.x3_.data(),
-                              s.x4_.data(), mean ? s.avx_.data() : nullptr);
+                              s.x4_.data(), avx);
             gear_predict_axis(n, dt, s.y_.data(), s.vy_.data(), s.y2_.data(), s.y3_.data(),
-                              s.y4_.data(), mean ? s.avy_.data() : nullptr);
+                              s.y4_.data(), avy);
             if constexpr (rot)  // the angle is not tracked: omega and its derivatives only
                 gear_predict_axis(n, dt, nullptr, s.w_.data(), s.w2_.data(), s.w3_.data(),
-                                  s.w4_.data(), mean ? s.aw_.data() : nullptr);
+                                  s.w4_.data(), aw);
         } else {
-            // Velocity Verlet: half kick with the last forces, then drift. Corrections: the
-            // dashpots see the velocity extrapolated to the end of the step with the last
-            // forces, v + dt/2 (F/m + g).
+            // Velocity Verlet: half kick with the last forces, then drift.
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-            if (corr) {
-                s.avx_.resize(n);
-                s.avy_.resize(n);
-                s.aw_.resize(n);
-            }
-            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.x_.data(),
-                        corr ? s.avx_.data() : nullptr);
-            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data(),
-                        corr ? s.avy_.data() : nullptr);
+            verlet_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.vx_.data(), s.x_.data(), avx);
+            verlet_axis(n, dt, gy, s.fy_.data(), s.inv_m_.data(), s.vy_.data(), s.y_.data(), avy);
             if constexpr (rot)
-                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr,
-                            corr ? s.aw_.data() : nullptr);
+                verlet_axis(n, dt, 0.0, s.tq_.data(), s.inv_I_.data(), s.w_.data(), nullptr, aw);
         }
         return max_displacement2(n, s.x_.data(), s.y_.data(), s.xref_.data(), s.yref_.data());
     }
