@@ -138,6 +138,11 @@ std::string scene_text(const engine::SceneParams& p) {
     if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
     if (q.jams_per_realization != d.protocol.jams_per_realization)
         l.add("protocol.jams_per_realization", q.jams_per_realization);
+    // Growing shakes (issue 23): listed only when the shakes grow.
+    if (q.shake_growth != d.protocol.shake_growth) {
+        l.add("protocol.shake_growth", q.shake_growth);
+        l.add("protocol.shake_amplitude_max", q.shake_amplitude_max);
+    }
     // Fields: listed only when on, so stores written before fields existed stay compatible.
     const auto& f = p.fields;
     if (f.enabled) {

@@ -95,8 +95,19 @@ JamDetector::Look JamDetector::look(const System& s, double td, double t_check) 
 Shaker::Shaker(const SceneParams& p, double dt)
     : period_(p.protocol.shake_period),
       amplitude_(p.protocol.shake_amplitude * p.particles.d_large),
+      growth_(p.protocol.shake_growth),
+      amplitude_max_(std::max(p.protocol.shake_amplitude, p.protocol.shake_amplitude_max) *
+                     p.particles.d_large),
       direction_(p.protocol.shake_direction),
       dt_(dt) {}
+
+double Shaker::amplitude() const {
+    // The k-th shake of a jam: A g^(k-1), capped (docs/model.md, step 5). At g = 1 this is
+    // A exactly (pow(1, n) = 1), as before the escalation existed.
+    if (growth_ == 1.0) return amplitude_;
+    return std::min(amplitude_ * std::pow(growth_, std::max(0, shakes_this_jam - 1)),
+                    amplitude_max_);
+}
 
 void Shaker::start(double sim_time) {
     ++shakes_this_jam;
@@ -111,8 +122,8 @@ void Shaker::drive(System& s) const {
     }
     const double om = 2.0 * core::pi / period_;
     const Vec2 e(std::cos(direction_), std::sin(direction_));
-    s.set_wall_motion(amplitude_ * std::sin(om * tau) * e,
-                      amplitude_ * om * std::cos(om * tau) * e);
+    const double a = amplitude();
+    s.set_wall_motion(a * std::sin(om * tau) * e, a * om * std::cos(om * tau) * e);
 }
 
 bool Shaker::done(double sim_time) const {
@@ -231,6 +242,12 @@ void Reinserter::reinsert(int id, const SceneParams& p, System& s, IdTable& ids,
     const double d = ids.diameter[id], rad = 0.5 * d;
     const double top = insert_base;
     const double half_w = 0.5 * p.hopper.width - 1.01 * rad;
+    // A disk dropped here falls straight down onto the packing, so it must clear the walls at
+    // the packing's top, where the container is narrowest below it: with a small head the top
+    // lies in the funnel, narrower than the hopper's width (issue 23). Draws outside are drawn
+    // again; where the top is above the funnel nothing is refused, so the draws (and the bits
+    // of every steady state with a full hopper) are those of before.
+    const double inside = inner_half_width(p.hopper, std::max(0.0, top)) - 1.01 * rad;
     const Vec2 off = s.wall_offset();
     const auto overlaps = [&](const Vec2& q) {
         const auto x = s.x(), y = s.y(), r = s.r();
@@ -251,7 +268,7 @@ void Reinserter::reinsert(int id, const SceneParams& p, System& s, IdTable& ids,
         const double band = 2.5 + attempt / 200;
         const double lift = rng.uniform(0.5, 0.5 + band) * p.particles.d_large;
         const Vec2 q(rng.uniform(-half_w, half_w), top + rad + lift);
-        if (overlaps(q)) continue;
+        if (std::abs(q.x()) > inside || overlaps(q)) continue;
         const double m = ids.mass[id], I = ids.inertia[id];
         const int nid = s.add_particle(q, d, m, I, Vec2::Zero(), 0.0);
         ids.remember(nid, m, d, I);

@@ -57,11 +57,13 @@ class JamDetector {
 };
 
 // The shake (docs/model.md, step 5): one sinusoidal oscillation of the walls,
-// u(t) = A sin(2 pi t / T) e.
+// u(t) = A_k sin(2 pi t / T) e, the k-th shake of a jam with A_k = min(A g^(k-1), A_max).
 class Shaker {
   public:
     Shaker(const SceneParams& p, double dt);
     void start(double sim_time);
+    // A_k of the current shake (m): from shakes_this_jam, so a checkpoint needs nothing more.
+    double amplitude() const;
     // Wall motion at the end of the coming step (at rest once the period is over).
     void drive(System& s) const;
     bool done(double sim_time) const;
@@ -70,7 +72,7 @@ class Shaker {
     int shakes_this_jam = 0;
 
   private:
-    double period_, amplitude_, direction_, dt_;
+    double period_, amplitude_, growth_, amplitude_max_, direction_, dt_;
 };
 
 // What left the hopper and when: exit times (in the result), their masses, the discharge

@@ -154,6 +154,14 @@ void validate_scene(const SceneParams& p) {
     if (pr.max_shakes < 0 || pr.max_shakes > 100000)
         throw ConfigError("parameter protocol.max_shakes = " + std::to_string(pr.max_shakes) +
                           " is out of range: allowed [0, 100000]");
+    require_range("protocol.shake_growth", pr.shake_growth, 1.0, 10.0, false);
+    require_range("protocol.shake_amplitude_max", pr.shake_amplitude_max, 0.0, 100.0, true);
+    if (pr.shake_growth > 1.0 && pr.shake_amplitude_max < pr.shake_amplitude)
+        throw ConfigError(
+            "parameter protocol.shake_amplitude_max = " + std::to_string(pr.shake_amplitude_max) +
+            " is below protocol.shake_amplitude = " + std::to_string(pr.shake_amplitude) +
+            ": the cap of growing shakes must be at least the first shake's "
+            "amplitude");
     require_range("protocol.max_time", pr.max_time, 0.0, 1e7, true, " s");
     require_range("protocol.exit_depth", pr.exit_depth, pr.jam_region_height, 1000.0, true);
     if (pr.empty_threshold < 0 || pr.empty_threshold >= s.count)

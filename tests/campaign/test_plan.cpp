@@ -74,7 +74,8 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     // written before them resume), present when set.
     for (const char* name :
          {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over", "slip_rule",
-          "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization"})
+          "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization",
+          "shake_growth", "shake_amplitude_max"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
     // The contact corrections: in the text when on (the default since issue 12), absent when
     // off, so that stores written before them (off) resume with contact_corrections = false.
@@ -104,6 +105,14 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
                                "protocol.mode=steady_state\nprotocol.jams_per_realization=5\n") !=
                            std::string::npos;
                 }());
+    // Issue 23's growing shakes: in the text when the shakes grow, with their cap.
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.shake_growth = 1.5; }));
+    {
+        engine::SceneParams a, b;
+        a.protocol.shake_growth = b.protocol.shake_growth = 1.5;
+        b.protocol.shake_amplitude_max = 2.0;
+        EXPECT_NE(scene_text(a), scene_text(b));
+    }
     // Shortest round-trip numbers: one ulp differs.
     EXPECT_TRUE(changed([](auto& q) { q.material.system.e_n = std::nextafter(0.5, 1.0); }));
 }

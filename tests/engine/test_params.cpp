@@ -194,4 +194,16 @@ TEST(Params, ValidateRejectsNonsense) {
     expect_rejected(sp, {"collision_time"});
 }
 
+TEST(Params, ValidateRejectsShakesThatShrinkOrACapBelowTheFirstShake) {
+    SceneParams sp;
+    sp.protocol.shake_growth = 0.5;
+    expect_rejected(sp, {"protocol.shake_growth", "[1, 10]"});
+    sp = SceneParams{};
+    sp.protocol.shake_growth = 1.5;
+    sp.protocol.shake_amplitude_max = 0.1;  // below shake_amplitude = 0.25
+    expect_rejected(sp, {"protocol.shake_amplitude_max", "protocol.shake_amplitude"});
+    sp.protocol.shake_growth = 1.0;  // no growth: the cap plays no part
+    EXPECT_NO_THROW(validate_scene(sp));
+}
+
 }  // namespace

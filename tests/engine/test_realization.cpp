@@ -2,7 +2,10 @@
 // required behaviour tests). Each run takes about a second.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <numeric>
+#include <vector>
 
 #include "hopper/core/error.hpp"
 #include "hopper/engine/realization.hpp"
@@ -185,4 +188,69 @@ TEST(Realization, SettledColumnCarriesItsWeightOnTheWalls) {
     }
     EXPECT_NEAR(mean.y(), -weight, 0.01 * weight);
     EXPECT_NEAR(mean.x(), 0.0, 0.01 * weight);
+}
+
+// Issue 23: growing shakes. The k-th shake of a jam has the amplitude
+// min(A g^(k-1), A_max) (docs/model.md, step 5), measured here on the walls themselves: every
+// shake's largest vertical displacement of an edge disk, sampled 64 times per period.
+TEST(Realization, ShakesOfOneJamGrowByTheFactorUpToTheCap) {
+    SceneParams p = tiny(1.6);
+    p.protocol.shake_amplitude = 0.02;  // too weak to clear a jam: the shakes must grow
+    p.protocol.shake_growth = 2.0;
+    p.protocol.shake_amplitude_max = 0.1;
+    p.protocol.max_shakes = 6;
+    p.protocol.max_time = 4.0;
+    const double T = p.protocol.shake_period;
+    struct Sample {
+        Phase phase;
+        double t, y;
+    };
+    std::vector<Sample> samples;
+    RunHooks hooks;
+    hooks.snapshot_interval = T / 64;
+    hooks.on_snapshot = [&](const Snapshot& s) {
+        if (s.phase != Phase::settle) samples.push_back({s.phase, s.sim_time, s.wall_y[0]});
+    };
+    const RealizationResult r = run_realization(p, 1, hooks);
+    expect_consistent(r);
+    ASSERT_GE(r.n_jams, 1) << r.message;
+    ASSERT_FALSE(samples.empty());
+    ASSERT_NE(samples.front().phase, Phase::shake);
+    const double rest = samples.front().y;
+    // One maximum per shake: a shake is a run of consecutive shake-phase samples.
+    std::vector<double> peaks;
+    bool in_shake = false;
+    for (const Sample& s : samples) {
+        if (s.phase == Phase::shake) {
+            if (!in_shake) peaks.push_back(0.0);
+            peaks.back() = std::max(peaks.back(), std::abs(s.y - rest));
+        }
+        in_shake = s.phase == Phase::shake;
+    }
+    // The amplitudes the jams' shake counts call for, in order.
+    std::vector<double> expected;
+    int most = 0;
+    for (int n : r.shakes_per_jam) {
+        most = std::max(most, n);
+        for (int k = 1; k <= n; ++k)
+            expected.push_back(std::min(0.02 * std::pow(2.0, k - 1), 0.1) * p.particles.d_large);
+    }
+    ASSERT_GE(most, 4) << "no jam needed four shakes: the cap was never reached";
+    ASSERT_EQ(peaks.size(), expected.size());
+    for (std::size_t k = 0; k < peaks.size(); ++k) {
+        EXPECT_LE(peaks[k], expected[k] * (1 + 1e-9)) << "shake " << k;
+        EXPECT_GE(peaks[k], expected[k] * 0.99) << "shake " << k;
+    }
+}
+
+// At shake_growth = 1 (the default) the cap plays no part: every shake is the first one.
+TEST(Realization, WithoutGrowthTheCapChangesNothing) {
+    SceneParams a = tiny(1.8);
+    a.protocol.max_time = 3.0;
+    SceneParams b = a;
+    b.protocol.shake_amplitude_max = 0.01;  // below the amplitude: ignored without growth
+    const RealizationResult ra = run_realization(a, 3), rb = run_realization(b, 3);
+    ASSERT_GE(ra.n_shakes, 1);
+    EXPECT_EQ(ra.exit_times, rb.exit_times);
+    EXPECT_EQ(ra.shakes_per_jam, rb.shakes_per_jam);
 }

@@ -105,6 +105,38 @@ TEST(SteadyState, ReinsertsWhatLeavesAndStopsAfterTheJamsAskedFor) {
     EXPECT_GT(r.discharged, 0);
 }
 
+// Issue 23: a small head, whose top lies in the funnel (20 cm hopper at 45 deg: the funnel
+// reaches 8.8 cm up; 60 disks fill about 4 cm of it). Every re-inserted disk must land inside
+// the container: none may ever be found outside the walls above the outlet plane (before the
+// fix, x was drawn across the whole hopper width and disks fell down the funnel's outside).
+TEST(SteadyState, ASmallHeadReinsertsInsideTheFunnel) {
+    SceneParams p = tiny(2.4);
+    p.hopper.width = 20.0 * cm;  // the funnel reaches 8.8 cm up
+    p.particles.count = 60;
+    p.protocol.mode = ProtocolMode::steady_state;
+    p.protocol.max_time = 2.0;
+    int outside = 0, samples = 0;
+    double top_at_open = -1.0;
+    RunHooks hooks;
+    hooks.snapshot_interval = 0.01;
+    hooks.on_snapshot = [&](const Snapshot& s) {
+        if (s.phase == Phase::settle) return;
+        if (samples++ == 0)
+            for (std::size_t i = 0; i < s.x.size(); ++i)
+                top_at_open = std::max(top_at_open, s.y[i] + s.radius[i]);
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+            if (s.y[i] <= 0.0) continue;
+            if (std::abs(s.x[i]) > inner_half_width(p.hopper, s.y[i]) + 1e-9) ++outside;
+        }
+    };
+    const RealizationResult r = run_realization(p, 2, hooks);
+    ASSERT_NE(r.status, Status::failed) << r.message;
+    ASSERT_GT(r.discharged, 60) << "too few re-insertions to test anything";
+    ASSERT_GT(samples, 10);
+    EXPECT_LT(top_at_open, 0.06) << "the head is meant to lie well inside the funnel";
+    EXPECT_EQ(outside, 0);
+}
+
 TEST(SteadyState, IsDeterministicAndDiffersFromThePublishedProtocolOnlyAfterTheFirstExit) {
     SceneParams p = tiny(1.8);
     p.protocol.mode = ProtocolMode::steady_state;

@@ -135,7 +135,12 @@ struct ProtocolParams {
     double shake_period = 0.05;           // s
     double shake_direction = 90.0 * deg;  // angle to the horizontal (90 deg = vertical)
     int max_shakes = 10;                  // shakes per jam before the realization is "arrested"
-    double max_time = 600.0;              // s of discharge (shaking excluded) before "time_limit"
+    // Escalation (issue 23): the k-th shake of one jam has the amplitude
+    // min(shake_amplitude * shake_growth^(k-1), max(shake_amplitude, shake_amplitude_max)).
+    // At shake_growth = 1 (the default) every shake is the same, as in the published protocol.
+    double shake_growth = 1.0;
+    double shake_amplitude_max = 1.0;  // in units of d_large
+    double max_time = 600.0;           // s of discharge (shaking excluded) before "time_limit"
     // A particle this far below the outlet (units of d_large) has left and is removed.
     double exit_depth = 4.0;
     // The hopper counts as empty when at most this many particles are left in it.
