@@ -27,8 +27,24 @@ CALIBRATED = {
     ],
 }
 
+# Added to the paper studies only (issue 23; docs/clogging.md): with the calibrated walls, arches
+# whose end disks sit in the groove between the edge disk and the next wall disk survive ten
+# equal shakes; each further shake of a jam 1.5 times stronger (up to one large diameter) clears
+# them. The calibration targets (D >= 4.1 cm) never jam and keep their physics.
+PROTOCOL = {
+    "protocol": [
+        ("shake_growth", "1.5", "each further shake of one jam 1.5 times stronger (issue 23)"),
+        ("shake_amplitude_max", "1.0", "up to one large-disk diameter"),
+        ("max_shakes", "50", "a jam is given up only after 50 shakes"),
+    ],
+}
 
-def calibrate(text, name, source="campaigns/paper"):
+
+def mark(section):
+    return "calibrated" if section in CALIBRATED else "unjamming"
+
+
+def calibrate(text, name, source="campaigns/paper", choices=CALIBRATED):
     lines = text.split("\n")
     header = [
         "# CALIBRATED VARIANT (issue 11; written by campaigns/paper-calibrated/generate.py from",
@@ -36,24 +52,26 @@ def calibrate(text, name, source="campaigns/paper"):
         "# modelling choices marked 'calibrated' below (docs/calibration.md). Same points, labels",
         "# and seeds as the spec-literal file.",
     ]
+    if "protocol" in choices:
+        header += ["# Unjamming marked 'unjamming': the growing shakes of issue 23 (docs/clogging.md)."]
     out = header + []
     seen = set()
     for line in lines:
         m = re.match(r"^\[([a-z]+)\]\s*$", line)
         out.append(line)
-        if m and m.group(1) in CALIBRATED:
+        if m and m.group(1) in choices:
             seen.add(m.group(1))
-            for key, value, why in CALIBRATED[m.group(1)]:
-                out.append("%s = %s  # calibrated: %s" % (key, value, why))
+            for key, value, why in choices[m.group(1)]:
+                out.append("%s = %s  # %s: %s" % (key, value, mark(m.group(1)), why))
     text = "\n".join(out)
     # Sections the spec-literal file does not have: added before [campaign].
     extra = ""
-    for section, items in CALIBRATED.items():
+    for section, items in choices.items():
         if section in seen:
             continue
         extra += "[%s]\n" % section
         for key, value, why in items:
-            extra += "%s = %s  # calibrated: %s\n" % (key, value, why)
+            extra += "%s = %s  # %s: %s\n" % (key, value, mark(section), why)
         extra += "\n"
     if extra:
         text = text.replace("\n[campaign]\n", "\n" + extra + "[campaign]\n", 1)
@@ -69,7 +87,7 @@ def main():
         with open(os.path.join(PAPER, name)) as fh:
             text = fh.read()
         with open(os.path.join(HERE, name), "w") as fh:
-            fh.write(calibrate(text, name))
+            fh.write(calibrate(text, name, choices={**CALIBRATED, **PROTOCOL}))
         print("wrote campaigns/paper-calibrated/" + name)
     for stem in ("targets", "beverloo"):
         with open(os.path.join(CALIBRATION, stem + "-spec.toml")) as fh:
