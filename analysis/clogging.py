@@ -1,0 +1,204 @@
+#!/usr/bin/python3
+"""Tables of issue 23 (docs/clogging.md): arrests and the growing shakes, the head scan.
+
+usage:
+  clogging.py arrests STORE.h5 [--json OUT]
+      realizations by status, and tau and jams per realization for all realizations, for those
+      in which every jam cleared at the first shake (no grown shake) and for the others
+  clogging.py heads PUBLISHED.h5 STEADY.h5 [--ns-per-particle-step LABEL=NS ...] [--json OUT]
+      per point of both stores: jams, tau [95 % CI], <s> +- se, particle-steps per jam (the
+      work, independent of the machine's load) and, where a point's CPU cost per particle-step
+      is given, core-seconds per jam; each steady-state point against the published protocol
+      (z = difference over the combined standard error)
+
+Both read a store with analysis/hopper_store.py (h5py). tau is the censored exponential MLE
+(total observed time over jams) with the chi-square 95 % interval, as `campaign analyze`
+(docs/statistics.md); <s> likewise over the avalanche sizes of the survival intervals.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+from scipy import stats
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hopper_store import open_store  # noqa: E402
+
+
+def censored_mean(values, events):
+    """Censored exponential MLE: sum / events, chi-square 95 % interval, se = mean/sqrt(k)."""
+    values = np.asarray(values, float)
+    k = int(np.sum(events))
+    total = float(np.sum(values))
+    if k == 0:
+        # No event: only a lower bound (95 %): total / (chi2_{0.95}(2) / 2).
+        return {"jams": 0, "total": total, "mean": None, "lo": total / (stats.chi2.ppf(0.95, 2) / 2),
+                "hi": None, "se": None}
+    mean = total / k
+    lo = 2 * total / stats.chi2.ppf(0.975, 2 * k)
+    hi = 2 * total / stats.chi2.ppf(0.025, 2 * k)
+    return {"jams": k, "total": total, "mean": mean, "lo": lo, "hi": hi, "se": mean / math.sqrt(k)}
+
+
+def z_of(a, b):
+    if a["mean"] is None or b["mean"] is None:
+        return None
+    return (a["mean"] - b["mean"]) / math.hypot(a["se"], b["se"])
+
+
+def fmt(e, digits=3):
+    if e["mean"] is None:
+        return "> %.*g (no jam)" % (digits, e["lo"])
+    return "%.*g +- %.*g [%.*g, %.*g]" % (digits, e["mean"], 2, e["se"], digits, e["lo"], digits,
+                                         e["hi"])
+
+
+def particle_steps(store):
+    """Particle-steps per realization: wall seconds x 1e9 / ns per particle-step."""
+    d = store._f["realizations/diagnostics"]
+    wall = np.asarray(d["wall_seconds"][:], float)
+    ns = np.asarray(d["ns_per_particle_step"][:], float)
+    out = np.where(ns > 0, wall * 1e9 / np.where(ns > 0, ns, 1), 0.0)
+    return out
+
+
+def arrests(path, out):
+    with open_store(path) as s:
+        r = s.realizations
+        surv = s.survival
+        jams = s.jams
+        by_status = r["status"].value_counts().to_dict()
+        grown = set()
+        for (pt, real), g in jams.groupby(["point", "realization"]):
+            if (g["shakes"] > 1).any():
+                grown.add((pt, real))
+        most = jams.groupby(["point", "realization"])["shakes"].max()
+        result = {"store": path, "realizations": int(len(r)), "by_status": by_status,
+                  "shakes_needed": {int(k): int(v) for k, v in jams["shakes"].value_counts()
+                                    .sort_index().items()},
+                  "groups": {}}
+        keys = list(zip(r["point"], r["realization"]))
+        for name, keep in (("all", lambda k: True), ("no grown shake", lambda k: k not in grown),
+                           ("grown shake", lambda k: k in grown)):
+            sel = [k for k in keys if keep(k)]
+            if not sel:
+                continue
+            mask = [(p, q) in set(sel) for p, q in zip(surv["point"], surv["realization"])]
+            sv = surv[mask]
+            tau = censored_mean(sv["duration"], sv["event"])
+            rr = r[[k in set(sel) for k in keys]]
+            n = rr["n_jams"].to_numpy(float)
+            result["groups"][name] = {
+                "realizations": len(sel), "tau": tau,
+                "jams_per_realization": float(n.mean()),
+                "jams_per_realization_se": float(n.std(ddof=1) / math.sqrt(len(n))) if len(n) > 1
+                else None,
+                "arrested": int((rr["status"] == "arrested").sum())}
+        a, b = result["groups"].get("no grown shake"), result["groups"].get("grown shake")
+        if a and b:
+            result["z_tau"] = z_of(b["tau"], a["tau"])
+            if a["jams_per_realization_se"] and b["jams_per_realization_se"]:
+                result["z_jams_per_realization"] = (
+                    (b["jams_per_realization"] - a["jams_per_realization"]) /
+                    math.hypot(a["jams_per_realization_se"], b["jams_per_realization_se"]))
+    print("%s: %d realizations, %s" % (path, result["realizations"], result["by_status"]))
+    print("shakes needed per jam (count of jams): %s" % result["shakes_needed"])
+    print("%-16s %5s %8s %-34s %s" % ("realizations", "n", "arrested", "tau (s) +- se [95% CI]",
+                                      "jams per realization +- se"))
+    for name, g in result["groups"].items():
+        se = g["jams_per_realization_se"]
+        print("%-16s %5d %8d %-34s %.3g%s" % (name, g["realizations"], g["arrested"], fmt(g["tau"]),
+                                              g["jams_per_realization"],
+                                              " +- %.2g" % se if se else ""))
+    for key in ("z_tau", "z_jams_per_realization"):
+        if result.get(key) is not None:
+            print("%s (grown - no grown) / combined se: %+.2f" % (key, result[key]))
+    if out:
+        with open(out, "w") as fh:
+            json.dump(result, fh, indent=1)
+
+
+def point_rows(path, ns_by_label):
+    rows = []
+    with open_store(path) as s:
+        r = s.realizations
+        surv = s.survival
+        ps = particle_steps(s)
+        pts = s.points
+        for i, pt in pts.iterrows():
+            sv = surv[surv["point"] == i]
+            rr = r[r["point"] == i]
+            tau = censored_mean(sv["duration"], sv["event"])
+            sizes = sv["avalanche_size"].to_numpy(float)
+            s_mean = censored_mean(sizes, sv["event"])
+            steps = float(ps[rr.index.to_numpy()].sum()) if len(rr) else 0.0
+            row = {"store": path, "label": pt["label"], "particles": int(pt["particles"]),
+                   "realizations": int(len(rr)), "tau": tau, "mean_s": s_mean,
+                   "particle_steps": steps,
+                   "particle_steps_per_jam": steps / tau["jams"] if tau["jams"] else None,
+                   "statuses": rr["status"].value_counts().to_dict()}
+            ns = ns_by_label.get(pt["label"])
+            if ns:
+                row["ns_per_particle_step"] = ns
+                row["core_seconds"] = steps * ns * 1e-9
+                row["core_seconds_per_jam"] = (steps * ns * 1e-9 / tau["jams"]
+                                               if tau["jams"] else None)
+            rows.append(row)
+    return rows
+
+
+def heads(published, steady, ns_args, out):
+    ns_by_label = {}
+    for a in ns_args or []:
+        label, _, ns = a.rpartition("=")
+        ns_by_label[label] = float(ns)
+    ref = point_rows(published, ns_by_label)
+    rows = point_rows(steady, ns_by_label)
+    if len(ref) != 1:
+        sys.exit("clogging.py heads: the published store must hold one point, it has %d" % len(ref))
+    ref = ref[0]
+    for row in rows:
+        row["z_tau"] = z_of(row["tau"], ref["tau"])
+        row["z_mean_s"] = z_of(row["mean_s"], ref["mean_s"])
+    print("%-44s %6s %5s %-30s %-30s %8s %8s %12s" % (
+        "point", "N", "jams", "tau (s) +- se [95% CI]", "<s> +- se [95% CI]", "z tau", "z <s>",
+        "Mps/jam"))
+    for row in [ref] + rows:
+        print("%-44s %6d %5d %-30s %-30s %8s %8s %12s" % (
+            row["label"][:44], row["particles"], row["tau"]["jams"], fmt(row["tau"]),
+            fmt(row["mean_s"]),
+            "%+.2f" % row["z_tau"] if row.get("z_tau") is not None else "-",
+            "%+.2f" % row["z_mean_s"] if row.get("z_mean_s") is not None else "-",
+            "%.4g" % (row["particle_steps_per_jam"] / 1e6) if row["particle_steps_per_jam"]
+            else "-"))
+    if out:
+        with open(out, "w") as fh:
+            json.dump({"published": ref, "steady_state": rows}, fh, indent=1)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    a = sub.add_parser("arrests")
+    a.add_argument("store")
+    a.add_argument("--json")
+    h = sub.add_parser("heads")
+    h.add_argument("published")
+    h.add_argument("steady")
+    h.add_argument("--ns-per-particle-step", nargs="*", metavar="LABEL=NS")
+    h.add_argument("--json")
+    args = ap.parse_args()
+    for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)]:
+        if not os.path.exists(p):
+            sys.exit("clogging.py: no such store: %s" % p)
+    if args.cmd == "arrests":
+        arrests(args.store, args.json)
+    else:
+        heads(args.published, args.steady, args.ns_per_particle_step, args.json)
+
+
+if __name__ == "__main__":
+    main()
