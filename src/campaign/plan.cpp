@@ -138,6 +138,8 @@ std::string scene_text(const engine::SceneParams& p) {
     if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
     if (q.jams_per_realization != d.protocol.jams_per_realization)
         l.add("protocol.jams_per_realization", q.jams_per_realization);
+    // The unjamming protocol (issue 26): listed only when it is not the shake.
+    if (q.unjam != d.protocol.unjam) l.add("protocol.unjam", engine::to_string(q.unjam));
     // Growing shakes (issue 23): listed only when the shakes grow.
     if (q.shake_growth != d.protocol.shake_growth) {
         l.add("protocol.shake_growth", q.shake_growth);

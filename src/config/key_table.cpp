@@ -236,6 +236,12 @@ const std::vector<KeyDef> table = {
                p.protocol.mode = choice_of(v, {M::published, M::steady_state});
            },
            [](const P& p) -> Read { return engine::to_string(p.protocol.mode); }, "published,steady_state"},
+    KeyDef{"protocol", "unjam", "protocol.unjam", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               using U = engine::UnjamMode;
+               p.protocol.unjam = choice_of(v, {U::shake, U::remove_arch, U::refill});
+           },
+           [](const P& p) -> Read { return engine::to_string(p.protocol.unjam); }, "shake,remove_arch,refill"},
     KeyDef{"protocol", "jams_per_realization", "protocol.jams_per_realization", Kind::integer, 0, 1e7, closed, closed, "",
            [](P& p, V v) { p.protocol.jams_per_realization = static_cast<int>(num(v)); },
            [](const P& p) -> Read { return static_cast<double>(p.protocol.jams_per_realization); }},

@@ -141,4 +141,21 @@ Arch find_arch(std::span<const ArchDisk> disks, double y_floor) {
     return arch;
 }
 
+std::vector<int> arch_removal(std::span<const ArchDisk> disks, double y_floor, double y_outlet,
+                              double reach) {
+    Arch arch = find_arch(disks, y_floor);
+    if (arch.found()) return std::move(arch.ids);
+    std::vector<int> out;
+    double best = std::numeric_limits<double>::infinity();
+    for (const ArchDisk& d : disks) {
+        if (d.wall || d.y < y_outlet || std::abs(d.x) > reach) continue;
+        const double d2 = d.x * d.x + (d.y - y_outlet) * (d.y - y_outlet);
+        if (d2 < best) {
+            best = d2;
+            out.assign(1, d.id);
+        }
+    }
+    return out;
+}
+
 }  // namespace hopper::engine

@@ -80,10 +80,13 @@ void System::rebuild() {
 void System::remove_below_floor() {
     std::vector<int>& keep = iscratch_;
     keep.clear();
+    const auto discarded = [&](int id) {
+        return std::find(discard_.begin(), discard_.end(), id) != discard_.end();
+    };
     for (std::size_t i = 0; i < y_.size(); ++i) {
         if (y_[i] < removal_floor_)
             removals_.push_back({id_[i], time_});
-        else
+        else if (discard_.empty() || !discarded(id_[i]))
             keep.push_back(int(i));
     }
     if (keep.size() == y_.size()) return;

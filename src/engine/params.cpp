@@ -45,6 +45,18 @@ std::string to_string(ProtocolMode m) {
     return m == ProtocolMode::published ? "published" : "steady_state";
 }
 
+std::string to_string(UnjamMode m) {
+    switch (m) {
+        case UnjamMode::shake:
+            return "shake";
+        case UnjamMode::remove_arch:
+            return "remove_arch";
+        case UnjamMode::refill:
+            return "refill";
+    }
+    return "shake";
+}
+
 namespace {
 
 // Rejects value unless lo <= value <= hi (or lo < value when open_lo), naming the parameter.
@@ -174,6 +186,11 @@ void validate_scene(const SceneParams& p) {
         throw ConfigError(
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
             " is out of range: allowed [0, 10000000]");
+    if (pr.unjam == UnjamMode::refill && pr.jams_per_realization > 1)
+        throw ConfigError(
+            "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
+            " cannot be met with protocol.unjam = refill, which ends every realization at its "
+            "first jam; allowed with refill: 0 or 1");
     if (pr.mode == ProtocolMode::published && pr.jams_per_realization != 0)
         throw ConfigError(
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +

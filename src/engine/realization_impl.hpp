@@ -125,7 +125,10 @@ struct Realization::Impl {
     }
 
     // The arch over the outlet now (arch.hpp), from the disks near the outlet.
-    Arch current_arch() const {
+    Arch current_arch() const { return find_arch(near_outlet(), det.y_region); }
+
+    // The mobile and wall disks near the outlet, for the arch finder.
+    std::vector<ArchDisk> near_outlet() const {
         const double reach = 2.0 * det.half_gap + 6.0 * p.particles.d_large;
         const double y_outlet = det.y_outlet;
         const auto near = [&](double x, double y) {
@@ -142,7 +145,7 @@ struct Realization::Impl {
         for (std::size_t i = 0; i < wx.size(); ++i)
             if (near(wx[i] + off.x(), wy[i] + off.y()))
                 disks.push_back({wid[i], wx[i] + off.x(), wy[i] + off.y(), wr[i], true});
-        return find_arch(disks, det.y_region);
+        return disks;
     }
 
     void fail(const std::string& why) {
@@ -322,7 +325,7 @@ struct Realization::Impl {
                 if (shaker.shakes_this_jam >= p.protocol.max_shakes) {
                     arrest();
                 } else {
-                    start_shake();
+                    unjam();
                 }
                 break;
             case detail::JamDetector::Look::nothing:
@@ -365,8 +368,46 @@ struct Realization::Impl {
         if (p.protocol.mode == ProtocolMode::steady_state && p.protocol.jams_per_realization > 0 &&
             res.n_jams >= p.protocol.jams_per_realization)
             return enough_jams();
+        if (p.protocol.unjam == UnjamMode::refill) return refill();
         if (p.protocol.max_shakes == 0) return arrest();
-        start_shake();
+        unjam();
+    }
+
+    // One try at clearing the jam (docs/model.md, step 5): a shake, or the arch's removal.
+    void unjam() {
+        if (p.protocol.unjam == UnjamMode::remove_arch)
+            remove_arch();
+        else
+            start_shake();
+    }
+
+    // protocol.unjam = remove_arch: the arch over the outlet (arch_removal, arch.hpp) leaves the
+    // hopper and its disks are re-inserted at the top as in the steady state; the detector then
+    // checks for t_check whether the flow restarted. Counted as one unjamming action
+    // (shakes_per_jam, n_shakes).
+    void remove_arch() {
+        const std::vector<int> gone = arch_removal(near_outlet(), det.y_region, det.y_outlet,
+                                                   det.half_gap + p.particles.d_large);
+        ++res.n_shakes;
+        ++shaker.shakes_this_jam;
+        res.shakes_per_jam.back() = shaker.shakes_this_jam;
+        sys->discard_particles(gone);
+        for (int id : gone)
+            reinserter.reinsert(id, p, *sys, ids, rng);
+        det.flow = Flow::checking;
+        det.check_start = td;
+    }
+
+    // protocol.unjam = refill: the avalanche ended by this jam is the realization's last; the
+    // next one starts from a new fill (the next realization).
+    void refill() {
+        res.status = Status::complete;
+        std::ostringstream msg;
+        msg << "refill: the avalanche ended by the jam at t = " << res.jam_onsets.back()
+            << " s (protocol.unjam = refill: the next avalanche is the next realization's)";
+        res.message = msg.str();
+        det.jammed.back().second = td;
+        end_run(Event::Kind::stop);
     }
 
     void start_shake() {

@@ -123,6 +123,17 @@ void System::flush_removals() {
     rebuild();
 }
 
+void System::discard_particles(std::span<const int> ids) {
+    discard_.assign(ids.begin(), ids.end());
+    // The neighbour list and the springs are rebuilt without them (as at a flush); before the
+    // first step there is no list yet and the columns are compacted directly.
+    if (ready_)
+        rebuild();
+    else
+        remove_below_floor();
+    discard_.clear();
+}
+
 std::vector<Removal> System::take_removals() {
     std::vector<Removal> out;
     out.swap(removals_);

@@ -75,7 +75,7 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
     for (const char* name :
          {"outlet_measure", "edge_diameter", "edge_offset", "gamma_t_over", "slip_rule",
           "lever_arm", "normal_damping", "fill_base", "protocol.mode", "jams_per_realization",
-          "shake_growth", "shake_amplitude_max"})
+          "shake_growth", "shake_amplitude_max", "unjam"})
         EXPECT_EQ(base.find(name), std::string::npos) << name;
     // The contact corrections: in the text when on (the default since issue 12), absent when
     // off, so that stores written before them (off) resume with contact_corrections = false.
@@ -105,6 +105,9 @@ TEST(Plan, SceneTextCoversEverySceneParameter) {
                                "protocol.mode=steady_state\nprotocol.jams_per_realization=5\n") !=
                            std::string::npos;
                 }());
+    // Issue 26's unjamming protocols.
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.unjam = engine::UnjamMode::remove_arch; }));
+    EXPECT_TRUE(changed([](auto& q) { q.protocol.unjam = engine::UnjamMode::refill; }));
     // Issue 23's growing shakes: in the text when the shakes grow, with their cap.
     EXPECT_TRUE(changed([](auto& q) { q.protocol.shake_growth = 1.5; }));
     {

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -142,6 +143,40 @@ TEST(ArchFinder, SingleDiskBlockingTheOutlet) {
     // through below: 2 atan(0.6/0.8) = 73.74 deg.
     EXPECT_NEAR(arch.span, 0.6, 1e-12);
     EXPECT_NEAR(arch.max_angle, 2 * std::atan(0.75), 1e-12);
+}
+
+}  // namespace
+
+// Issue 26: what protocol.unjam = remove_arch takes out of the hopper.
+namespace {
+
+using hopper::engine::arch_removal;
+
+TEST(ArchRemoval, TakesTheArchsDisksAndNothingAboveThem) {
+    Three a;
+    a.d.push_back(disk(10, 0.0, a.h + 1.0));  // resting on the arch: stays
+    EXPECT_EQ(arch_removal(a.d, -1.0, 0.0, 5.0), (std::vector<int>{1, 2, 3}));
+}
+
+TEST(ArchRemoval, WithoutAnArchTakesTheDiskNearestAboveTheOutletCentre) {
+    // A chain held by the left wall only (the right side disk is missing): no arch. Disk 1 at
+    // (-0.75, sqrt3/2) is 1.146 from the outlet centre (0, 0), disk 2 at (0, h) h = 1.527: disk
+    // 1 goes.
+    Three a;
+    a.d.erase(std::remove_if(a.d.begin(), a.d.end(), [](const ArchDisk& d) { return d.id == 3; }),
+              a.d.end());
+    ASSERT_FALSE(find_arch(a.d, -1.0).found());
+    EXPECT_EQ(arch_removal(a.d, -1.0, 0.0, 5.0), (std::vector<int>{1}));
+    // A disk below the outlet plane (falling) or beyond the reach is never taken.
+    a.d.push_back(disk(20, 0.0, -0.2));
+    a.d.push_back(disk(21, 3.0, 0.1));
+    EXPECT_EQ(arch_removal(a.d, -1.0, 0.0, 1.0), (std::vector<int>{1}));
+    // Within |x| <= 0.5 only disk 2 (on the axis) is left to take; within 0.1 of an axis
+    // emptied of it, nothing.
+    EXPECT_EQ(arch_removal(a.d, -1.0, 0.0, 0.5), (std::vector<int>{2}));
+    a.d.erase(std::remove_if(a.d.begin(), a.d.end(), [](const ArchDisk& d) { return d.id == 2; }),
+              a.d.end());
+    EXPECT_TRUE(arch_removal(a.d, -1.0, 0.0, 0.1).empty());
 }
 
 }  // namespace

@@ -206,4 +206,14 @@ TEST(Params, ValidateRejectsShakesThatShrinkOrACapBelowTheFirstShake) {
     EXPECT_NO_THROW(validate_scene(sp));
 }
 
+TEST(Params, ValidateRejectsMoreJamsThanARefillAllows) {
+    SceneParams sp;
+    sp.protocol.mode = ProtocolMode::steady_state;
+    sp.protocol.unjam = UnjamMode::refill;
+    sp.protocol.jams_per_realization = 2;
+    expect_rejected(sp, {"protocol.jams_per_realization", "refill"});
+    sp.protocol.jams_per_realization = 1;
+    EXPECT_NO_THROW(validate_scene(sp));
+}
+
 }  // namespace

@@ -120,6 +120,48 @@ TEST(Scene, FlatBottomAtThetaZeroAndSlotAtNinety) {
         EXPECT_LT(std::abs(f.pos.x()), 2.7 * cm / 2);
 }
 
+// Issue 26: the flat-bottomed silo of the clogging literature: theta = 0, W = 25 d, an outlet
+// of 3.5 d centred, monodisperse disks (small_fraction = 0: every disk d_large).
+TEST(Scene, FlatSiloOfMonodisperseDisks) {
+    const double d = 0.77 * cm, W = 25 * d, D = 3.5 * d;
+    SceneParams p = scene(D / cm, 0.0, 600, W / cm);
+    p.particles.small_fraction = 0.0;
+    Rng rng(3);
+    const SceneLayout s = build_scene(p, rng);
+    // The edge disks (the first two walls) at (+-(D/2 + d_w/2), 0): the free gap is D, centred.
+    ASSERT_GE(s.walls.size(), 2u);
+    EXPECT_NEAR(s.walls[0].pos.x() + s.walls[1].pos.x(), 0.0, 1e-15);
+    EXPECT_NEAR(std::abs(s.walls[0].pos.x()), D / 2 + d / 2, 1e-12);
+    EXPECT_NEAR(s.walls[0].pos.y(), 0.0, 1e-15);
+    // Nothing closes the outlet but the gate; the bottom reaches the side walls, which stand at
+    // x = +-(W/2 + d_w/2) up to the top of the walls.
+    // (Disks are laid along the outline at one wall spacing, d here: the corner's neighbours lie
+    // within one spacing of it.)
+    double widest = 0.0, lowest_side = 1e9;
+    for (const auto& w : s.walls) {
+        if (std::abs(w.pos.y()) < 1e-12) {
+            EXPECT_GE(std::abs(w.pos.x()), D / 2 + d / 2 - 1e-12);
+            widest = std::max(widest, std::abs(w.pos.x()));
+        }
+        if (std::abs(std::abs(w.pos.x()) - (W / 2 + d / 2)) < 1e-12)
+            lowest_side = std::min(lowest_side, w.pos.y());
+        EXPECT_LE(std::abs(w.pos.x()), W / 2 + d / 2 + 1e-12);
+        EXPECT_LE(w.pos.y(), s.wall_top + 1e-12);
+    }
+    EXPECT_GT(widest, W / 2 + d / 2 - d - 1e-12);
+    EXPECT_LT(lowest_side, d + 1e-12);
+    for (const auto& g : s.gate)
+        EXPECT_LT(std::abs(g.pos.x()), D / 2 + d / 2);
+    // Monodisperse: every disk d_large, inside the walls and above the bottom.
+    ASSERT_EQ(s.fill.size(), 600u);
+    for (const auto& f : s.fill) {
+        EXPECT_TRUE(f.large);
+        EXPECT_EQ(f.diameter, p.particles.d_large);
+        EXPECT_LE(std::abs(f.pos.x()) + f.diameter / 2, W / 2 + 1e-12);
+        EXPECT_GT(f.pos.y() - f.diameter / 2, d / 2);
+    }
+}
+
 TEST(Scene, SizesFollowTheSmallFractionAndTheSeed) {
     SceneParams p = scene(4.5, 60.0, 8750, 43.0);
     Rng a(11), b(11), c(12);

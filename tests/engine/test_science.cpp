@@ -165,3 +165,68 @@ TEST(SteadyState, ValidationNamesTheSetting) {
 }
 
 }  // namespace
+
+// Issue 26: the unjamming protocols, on a flat-bottomed silo of monodisperse disks (theta = 0,
+// 12 cm wide, 300 disks of d_large, mu = 0.5), outlet 2.4 d.
+namespace {
+
+SceneParams tiny_silo() {
+    SceneParams p = tiny(1.9);
+    p.hopper.theta = 0.0;
+    p.particles.small_fraction = 0.0;
+    p.material.system.mu = p.material.wall.mu = 0.5;
+    return p;
+}
+
+TEST(Unjam, RemovingTheArchClearsEveryJamWithoutShaking) {
+    SceneParams p = tiny_silo();
+    p.protocol.mode = ProtocolMode::steady_state;
+    p.protocol.unjam = UnjamMode::remove_arch;
+    p.protocol.jams_per_realization = 6;
+    int shaking = 0;
+    RunHooks hooks;
+    hooks.snapshot_interval = 0.005;
+    hooks.on_snapshot = [&](const Snapshot& s) { shaking += s.phase == Phase::shake; };
+    const RealizationResult r = run_realization(p, 4, hooks);
+    ASSERT_EQ(r.status, Status::complete) << r.message;
+    ASSERT_EQ(r.n_jams, 6);
+    EXPECT_EQ(shaking, 0);
+    EXPECT_DOUBLE_EQ(r.diagnostics.shake_time, 0.0);
+    // Each jam but the last (which ends the realization) needed at least one removal.
+    ASSERT_EQ(r.shakes_per_jam.size(), 6u);
+    for (std::size_t k = 0; k + 1 < r.shakes_per_jam.size(); ++k)
+        EXPECT_GE(r.shakes_per_jam[k], 1) << "jam " << k;
+    EXPECT_EQ(r.shakes_per_jam.back(), 0);
+    // The arch's disks go back in at the top: the count stays (but for those falling below the
+    // outlet), and they are not exits: the avalanche sizes still add up to the exits.
+    for (int n : r.curve_count)
+        EXPECT_GE(n, p.particles.count - 20);
+    const int crossed = std::accumulate(r.avalanche_sizes.begin(), r.avalanche_sizes.end(), 0);
+    EXPECT_GE(crossed, r.discharged);
+    EXPECT_LE(crossed, r.discharged + 20);
+    int arch_disks = 0;
+    for (const Arch& a : r.arches)
+        arch_disks += int(a.ids.size());
+    EXPECT_GT(arch_disks, 0);
+}
+
+TEST(Unjam, RefillEndsTheRealizationAtItsFirstJam) {
+    SceneParams p = tiny_silo();
+    p.protocol.unjam = UnjamMode::refill;
+    const RealizationResult r = run_realization(p, 4);
+    ASSERT_EQ(r.status, Status::complete) << r.message;
+    EXPECT_EQ(r.n_jams, 1);
+    EXPECT_EQ(r.n_shakes, 0);
+    ASSERT_EQ(r.survival_times.size(), 1u);
+    EXPECT_FALSE(r.censored[0]);
+    ASSERT_EQ(r.avalanche_sizes.size(), 1u);
+    EXPECT_GT(r.avalanche_sizes[0], 0);
+    EXPECT_NE(r.message.find("refill"), std::string::npos) << r.message;
+    // The same fill and flow as the shaking protocol up to that jam.
+    const RealizationResult shaken = run_realization(tiny_silo(), 4);
+    ASSERT_GE(shaken.n_jams, 1);
+    EXPECT_EQ(shaken.jam_onsets[0], r.jam_onsets[0]);
+    EXPECT_EQ(shaken.avalanche_sizes[0], r.avalanche_sizes[0]);
+}
+
+}  // namespace

@@ -112,6 +112,33 @@ TEST(FreeFall, IsExactAndRemovalReportsTheParticle) {
     }
 }
 
+// Issue 26: discard_particles takes particles out at once without reporting them as removals
+// (an arch's disks leave through the top, not the outlet); the others move on unchanged, in
+// free fall, before and after the first step.
+TEST(Discard, TakesParticlesOutUnreportedAndLeavesTheRestAlone) {
+    for (bool stepped : {false, true}) {
+        const ContactParams cp = contact_params(0.5, 0.5);
+        System s(system_config(Scheme::verlet, 50.0, cp, cp));
+        const int a = add_disk(s, Vec2(0.0, 0.0), d_large);
+        const int b = add_disk(s, Vec2(0.5, 1.0), d_small);
+        const int c = add_disk(s, Vec2(-0.5, 2.0), d_large);
+        s.set_removal_floor(-10.0);
+        if (stepped) s.run(100);
+        const std::vector<int> gone{a, c, 12345};  // an unknown id is ignored
+        s.discard_particles(gone);
+        EXPECT_TRUE(s.take_removals().empty());
+        EXPECT_EQ(s.mobile_count(), 1);
+        EXPECT_EQ(s.index_of(a), -1);
+        EXPECT_EQ(s.index_of(c), -1);
+        ASSERT_GE(s.index_of(b), 0);
+        s.run(100);
+        const double t = s.time();
+        const int i = s.index_of(b);
+        EXPECT_NEAR(s.position(i).y(), 1.0 - 0.5 * g * t * t, 1e-12);
+        EXPECT_TRUE(s.take_removals().empty());
+    }
+}
+
 // The energy observables on a state computed by hand: disk a pressed into a wall disk below it
 // (overlap 2e-5 m) and touched by disk b from the side (overlap 1e-5 m), both moving and
 // spinning. Particle-particle contacts are frictionless (mu = 0: no spring energy), the wall

@@ -44,4 +44,11 @@ inline constexpr double arch_contact_tolerance = 1e-9;
 // is not an arch (found() is false). Disks below y_floor are ignored (they are falling).
 Arch find_arch(std::span<const ArchDisk> disks, double y_floor);
 
+// What protocol.unjam = remove_arch takes out of the hopper at a jam (docs/model.md, step 5):
+// the mobile disks of the arch find_arch(disks, y_floor) returns; when there is none, the mobile
+// disk whose centre is nearest to the outlet's centre (0, y_outlet) among those at or above
+// y_outlet with |x| <= reach; nothing when there is no such disk either.
+std::vector<int> arch_removal(std::span<const ArchDisk> disks, double y_floor, double y_outlet,
+                              double reach);
+
 }  // namespace hopper::engine

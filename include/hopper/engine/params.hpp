@@ -52,8 +52,16 @@ enum class ProtocolMode {
                    // stays constant and the realization runs until jams_per_realization jams
 };
 
+// What clears a jam (docs/model.md, step 5; issue 26).
+enum class UnjamMode {
+    shake,        // shake the whole hopper (the published protocol; the default)
+    remove_arch,  // remove the arch over the outlet and re-insert its disks at the top
+    refill,       // end the realization at its first jam: the next avalanche is a new fill's
+};
+
 std::string to_string(OutletMeasure m);
 std::string to_string(ProtocolMode m);
+std::string to_string(UnjamMode m);
 std::string to_string(SlipRule r);
 std::string to_string(LeverArm a);
 std::string to_string(NormalDamping d);
@@ -152,6 +160,9 @@ struct ProtocolParams {
     // max_time). Ignored by the published protocol, which must leave it at 0.
     ProtocolMode mode = ProtocolMode::published;
     int jams_per_realization = 0;
+    // What clears a jam (issue 26). With remove_arch, max_shakes bounds the arch removals of
+    // one jam and the shake settings play no part.
+    UnjamMode unjam = UnjamMode::shake;
 };
 
 struct SceneParams {

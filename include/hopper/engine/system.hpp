@@ -83,6 +83,10 @@ class System {
     void set_removal_floor(double y);
     void flush_removals();
     std::vector<Removal> take_removals();
+    // Takes these mobile particles (ids) out at once, without reporting them as removals: they
+    // did not leave through the outlet (the arch removal of protocol.unjam, docs/model.md).
+    // Unknown ids are ignored.
+    void discard_particles(std::span<const int> ids);
 
     // --- stepping -------------------------------------------------------------------------
     // One time step. Throws core::SimulationError on a non-finite state or an overlap beyond
@@ -236,6 +240,7 @@ class System {
 
     double removal_floor_ = -1e300;
     std::vector<Removal> removals_;
+    std::vector<int> discard_;  // ids for remove_below_floor to drop unreported (transient)
 
     // Observables of the last force evaluation.
     Vec2 wall_force_ = Vec2::Zero();
