@@ -1,0 +1,185 @@
+#!/usr/bin/python3
+"""The flat-silo validation of issue 26 (docs/validation.md): table, fit and figure.
+
+usage: silo_validation.py REMOVE_ARCH.h5 [REFILL.h5] [--out DIR]
+
+Per outlet D/d (d: the disks' diameter; the silos are monodisperse): the avalanches (survival
+intervals ended by a clog; the censored last interval of a realization counts in <s>'s exposure,
+as `campaign analyze`, docs/statistics.md), <s> = grains / clogs with its standard error
+<s>/sqrt(clogs) and 95 % chi-square interval, the arches at the clogs (size in disks, the share
+found, the mean aspect ratio span / height), for both protocols. The fit
+ln(<s> + 1) = a + b (D/d)^2 is weighted least squares with sigma_i = se_i / (<s>_i + 1), over the
+outlets with at least 5 clogs; a and b with their standard errors and the reduced chi-square.
+Arch height: the top of the arch's highest disk above the outlet plane (y_i + d/2); span: the
+distance between the arch's two contacts with the wall disks (docs/model.md, step 9).
+
+Writes DIR/silo_validation.json, DIR/silo_validation.md (the tables) and DIR/silo_validation.png
+(ln(<s>+1) against (D/d)^2 with the fit; the arch size distributions per D/d).
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy import stats  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hopper_store import open_store  # noqa: E402
+
+plt.rcParams.update({"pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hopper"})
+
+
+def summarize(path):
+    rows = []
+    with open_store(path) as s:
+        pts = s.points
+        surv = s.survival
+        arches = s.arches
+        r = s.realizations
+        for i, pt in pts.iterrows():
+            d = float(pt["particles.d_large_m"]) if "particles.d_large_m" in pt else None
+            if d is None or not np.isfinite(d):
+                sys.exit("silo_validation.py: %s has no particles.d_large_m" % path)
+            D = float(pt["hopper.outlet_m"])
+            sv = surv[surv["point"] == i]
+            k = int(sv["event"].sum())
+            grains = float(sv["avalanche_size"].sum())
+            row = {"label": pt["label"], "D_over_d": D / d, "realizations": int((r["point"] == i).sum()),
+                   "clogs": k, "grains": grains}
+            if k > 0:
+                m = grains / k
+                row.update({"mean_s": m, "se": m / math.sqrt(k),
+                            "lo": 2 * grains / stats.chi2.ppf(0.975, 2 * k),
+                            "hi": 2 * grains / stats.chi2.ppf(0.025, 2 * k)})
+            else:
+                row.update({"mean_s": None, "se": None,
+                            "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
+            a = arches[arches["point"] == i]
+            found = a[a["disks"] > 0]
+            sizes = found["disks"].to_numpy(int)
+            ratios = []
+            for span, ys in zip(found["span"], found["y"]):
+                h = max(ys) + d / 2
+                if h > 0:
+                    ratios.append(span / h)
+            row.update({"arches_found": int(len(found)), "arch_jams": int(len(a)),
+                        "arch_mean_size": float(sizes.mean()) if len(sizes) else None,
+                        "arch_size_counts": {int(n): int(c) for n, c in
+                                             zip(*np.unique(sizes, return_counts=True))},
+                        "aspect_mean": float(np.mean(ratios)) if ratios else None,
+                        "aspect_se": float(np.std(ratios, ddof=1) / math.sqrt(len(ratios)))
+                        if len(ratios) > 1 else None})
+            rows.append(row)
+    return sorted(rows, key=lambda x: x["D_over_d"])
+
+
+def fit(rows):
+    use = [r for r in rows if r["clogs"] >= 5]
+    if len(use) < 3:
+        return None
+    x = np.array([r["D_over_d"] ** 2 for r in use])
+    y = np.array([math.log(r["mean_s"] + 1) for r in use])
+    sig = np.array([r["se"] / (r["mean_s"] + 1) for r in use])
+    w = 1 / sig ** 2
+    X = np.vstack([np.ones_like(x), x]).T
+    cov = np.linalg.inv(X.T @ (w[:, None] * X))
+    a, b = cov @ (X.T @ (w * y))
+    chi2 = float(np.sum(w * (y - a - b * x) ** 2))
+    return {"a": float(a), "a_err": float(math.sqrt(cov[0, 0])), "b": float(b),
+            "b_err": float(math.sqrt(cov[1, 1])), "cov_ab": float(cov[0, 1]),
+            "chi2_reduced": chi2 / (len(use) - 2) if len(use) > 2 else None,
+            "outlets": [r["D_over_d"] for r in use]}
+
+
+def table(name, rows):
+    out = ["### %s" % name, "",
+           "| D/d | realizations | clogs | <s> +- se [95 % CI] | arches found / clogs | mean arch size (disks) | span / height +- se |",
+           "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        s = ("%.4g +- %.2g [%.4g, %.4g]" % (r["mean_s"], r["se"], r["lo"], r["hi"])
+             if r["mean_s"] is not None else "> %.4g (no clog)" % r["lo"])
+        out.append("| %.2f | %d | %d | %s | %d / %d | %s | %s |" % (
+            r["D_over_d"], r["realizations"], r["clogs"], s, r["arches_found"], r["arch_jams"],
+            "%.2f" % r["arch_mean_size"] if r["arch_mean_size"] is not None else "-",
+            "%.2f +- %.2f" % (r["aspect_mean"], r["aspect_se"]) if r["aspect_se"] else "-"))
+    return "\n".join(out) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("remove_arch")
+    ap.add_argument("refill", nargs="?")
+    ap.add_argument("--out", default=".")
+    args = ap.parse_args()
+    for p in [args.remove_arch, args.refill]:
+        if p and not os.path.exists(p):
+            sys.exit("silo_validation.py: no such store: %s" % p)
+    result = {"remove_arch": summarize(args.remove_arch)}
+    result["fit_remove_arch"] = fit(result["remove_arch"])
+    if args.refill:
+        result["refill"] = summarize(args.refill)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "silo_validation.json"), "w") as fh:
+        json.dump(result, fh, indent=1)
+    md = table("Arch removal (steady state)", result["remove_arch"])
+    f = result["fit_remove_arch"]
+    if f:
+        md += ("\nFit ln(<s>+1) = a + b (D/d)^2 over D/d = %s: a = %.3f +- %.3f, b = %.4f +- %.4f"
+               " (covariance %.3g), reduced chi-square %.2f\n" % (
+                   ", ".join("%.2f" % v for v in f["outlets"]), f["a"], f["a_err"], f["b"],
+                   f["b_err"], f["cov_ab"], f["chi2_reduced"] if f["chi2_reduced"] is not None
+                   else float("nan")))
+    if args.refill:
+        md += "\n" + table("Refill after each clog", result["refill"])
+    with open(os.path.join(args.out, "silo_validation.md"), "w") as fh:
+        fh.write(md)
+    print(md)
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 3.6))
+    for key, marker, name in (("remove_arch", "o", "arch removal"), ("refill", "s", "refill")):
+        rows = [r for r in result.get(key, []) if r["mean_s"] is not None]
+        if not rows:
+            continue
+        x = [r["D_over_d"] ** 2 for r in rows]
+        y = [math.log(r["mean_s"] + 1) for r in rows]
+        e = [r["se"] / (r["mean_s"] + 1) for r in rows]
+        ax.errorbar(x, y, yerr=e, fmt=marker, mfc="none" if key == "refill" else None,
+                    label="%s (%s clogs)" % (name, "/".join(str(r["clogs"]) for r in rows)))
+    bounds = [r for r in result["remove_arch"] if r["mean_s"] is None]
+    for r in bounds:
+        ax.annotate("", xy=(r["D_over_d"] ** 2, math.log(r["lo"] + 1) + 0.6),
+                    xytext=(r["D_over_d"] ** 2, math.log(r["lo"] + 1)),
+                    arrowprops={"arrowstyle": "->"})
+    if bounds:
+        ax.plot([], [], "^", color="k", label="lower bound (no clog)")
+    if f:
+        xx = np.linspace(min(f["outlets"]) ** 2 * 0.95, max(f["outlets"]) ** 2 * 1.05, 50)
+        ax.plot(xx, f["a"] + f["b"] * xx, "-", color="grey",
+                label="a + b (D/d)$^2$: b = %.3f $\\pm$ %.3f" % (f["b"], f["b_err"]))
+    ax.set_xlabel("(D/d)$^2$")
+    ax.set_ylabel("ln(<s> + 1)")
+    ax.legend(fontsize=7)
+    for r in result["remove_arch"]:
+        c = r["arch_size_counts"]
+        if not c:
+            continue
+        n = np.array(sorted(c))
+        p = np.array([c[k] for k in n], float)
+        bx.plot(n, p / p.sum(), "o", label="D/d = %.1f (%d arches)" % (r["D_over_d"], int(p.sum())))
+    bx.set_xlabel("arch size (disks)")
+    bx.set_ylabel("fraction of arches")
+    bx.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "silo_validation.png"), dpi=150,
+                metadata={"Software": None})
+    print("wrote %s/silo_validation.{json,md,png}" % args.out)
+
+
+if __name__ == "__main__":
+    main()
