@@ -1,0 +1,136 @@
+#!/usr/bin/python3
+"""analysis/calibration.py on small synthetic stores whose answers are known by construction
+(issue 24, item 4): the Beverloo fit recovers A and k of rates made exactly from W = A (D - k d)^1.5;
+the targets table gives each published empty time's ratio for stores whose empty times are the
+published ones times a known factor; the sensitivity table gives each choice's rate change against
+the reference and the seed noise; bad arguments exit 2 with a message.
+
+usage: test_calibration.py SOURCE_DIR     (exit 0 pass, 1 fail, 77 skipped: no h5py/scipy)
+"""
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+try:
+    import h5py
+    import numpy as np
+    import scipy  # noqa: F401
+except ImportError:
+    sys.exit(77)
+
+SRC = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+CAL = os.path.join(SRC, "analysis", "calibration.py")
+failures = []
+checks = [0]
+
+
+def check(cond, what):
+    checks[0] += 1
+    if not cond:
+        failures.append(what)
+        print("FAIL: " + what)
+
+
+def scene(**kv):
+    base = {"hopper.theta_rad": math.pi / 4, "hopper.outlet_m": 0.045,
+            "particles.small_fraction": 0.5, "particles.d_small_m": 0.006,
+            "particles.d_large_m": 0.008, "material.e_n": 0.5, "material.mu": 0.8,
+            "walls.e_n": 0.5, "walls.mu": 0.8}
+    base.update(kv)
+    return "".join("%s=%r\n" % (k, v) for k, v in base.items())
+
+
+def make_store(path, points):
+    """points: [(label, scene text, [(seed, rate or None, empty time or None), ...])]."""
+    with h5py.File(path, "w") as f:
+        f.create_dataset("points/label", data=[p[0] for p in points], dtype=h5py.string_dtype())
+        f.create_dataset("points/scene", data=[p[1] for p in points], dtype=h5py.string_dtype())
+        rows = [(i, s, r, e) for i, p in enumerate(points) for (s, r, e) in p[2]]
+        r = f.create_group("realizations")
+        r["point"] = np.array([x[0] for x in rows], np.int32)
+        r["seed"] = np.array([x[1] for x in rows], np.uint64)
+        r["has_discharge_rate"] = np.array([x[2] is not None for x in rows], np.uint8)
+        r["discharge_rate"] = np.array([x[2] or 0.0 for x in rows])
+        r["has_empty_time"] = np.array([x[3] is not None for x in rows], np.uint8)
+        r["empty_time"] = np.array([x[3] or 0.0 for x in rows])
+        r["task_seconds"] = np.ones(len(rows))
+        r["diagnostics/wall_seconds"] = np.ones(len(rows))
+
+
+def run(*args):
+    p = subprocess.run(["/usr/bin/python3", CAL] + list(args), capture_output=True, text=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+work = tempfile.mkdtemp(prefix="test_calibration_")
+
+# --- Beverloo: W = A (D - k d)^1.5 with d the number-mean diameter 0.7 cm, A = 90, k = 1.2; two
+# seeds per outlet at +-1 % (their mean is exact; the fit is weighted by their standard error).
+A, k, d = 90.0, 1.2, 0.7
+pts = []
+for i, D in enumerate([2.7, 3.1, 3.5, 4.1, 4.5]):
+    W = A * (D - k * d) ** 1.5
+    pts.append(("D_cm=%g" % D, scene(**{"hopper.outlet_m": D / 100}),
+                [(10 * i + 1, W * 1.01, None), (10 * i + 2, W * 0.99, None)]))
+make_store(os.path.join(work, "bev.h5"), pts)
+rc, out, err = run("beverloo", os.path.join(work, "bev.h5"), "--out", work)
+check(rc == 0, "beverloo exits 0 (got %d: %s)" % (rc, err))
+m = re.search(r"A = ([\d.]+) \+- [\d.]+ particles/s/cm\^1.5, k = ([\d.]+) \+-", out)
+check(m is not None, "beverloo prints A and k")
+if m:
+    check(abs(float(m.group(1)) - A) < 0.1, "beverloo A = %s, expected %g" % (m.group(1), A))
+    check(abs(float(m.group(2)) - k) < 0.001, "beverloo k = %s, expected %g" % (m.group(2), k))
+check(os.path.exists(os.path.join(work, "beverloo.png")), "beverloo writes beverloo.png")
+# Two outlets cannot fix two parameters: refused with the reason, exit 2.
+make_store(os.path.join(work, "bev2.h5"), pts[:2])
+rc, out, err = run("beverloo", os.path.join(work, "bev2.h5"), "--out", work)
+check(rc == 2 and "at least 3 outlets" in err, "beverloo on 2 outlets exits 2 (got %d: %s)" %
+      (rc, err.strip()))
+
+# --- Targets: the theta = 45 deg targets (D = 4.1, 4.3, 4.5 cm: 17.27, 15.76, 14.52 s) with empty
+# times 1.05 x published (two seeds at 1.04 and 1.06 x).
+published = {4.1: 17.27, 4.3: 15.76, 4.5: 14.52}
+pts = []
+for i, (D, T) in enumerate(sorted(published.items())):
+    pts.append(("D_cm=%g" % D, scene(**{"hopper.outlet_m": D / 100}),
+                [(i * 2 + 1, None, T * 1.04), (i * 2 + 2, None, T * 1.06)]))
+make_store(os.path.join(work, "tgt.h5"), pts)
+rc, out, err = run("targets", os.path.join(work, "tgt.h5"), "--out", work)
+check(rc == 0, "targets exits 0 (got %d: %s)" % (rc, err))
+for D, T in published.items():
+    row = [l for l in out.splitlines() if l.startswith("| 45 | %g |" % D)]
+    check(len(row) == 1, "targets has one row for D = %g" % D)
+    if row:
+        check("| %.2f | 1.050 | +5.0 %% |" % (T * 1.05) in row[0],
+              "targets row for D = %g gives %.2f s, ratio 1.050, +5.0 %%: %s" % (D, T * 1.05, row[0]))
+check("3 of 11 targets, largest error 5.0 %, rms 5.0 %" in out, "targets summary line")
+# The theta = 60 deg targets are not in the store: shown as missing, not invented.
+row60 = [l for l in out.splitlines() if l.startswith("| 60 | 4.5 | 0.5, 0.5 |")]
+check(len(row60) == 1 and row60[0].endswith(" - | - | - |"), "a missing target shows '-'")
+
+# --- Sensitivity at 45 deg, D = 4.5 cm: the reference with three seeds (rates 500, 510, 520: mean
+# 510, sd 10) and one choice with rate 561 (+10 %, +5.1 noise, implied empty time -9.1 %).
+ref = scene()
+pts = [("reference", ref, [(1, 500.0, None), (2, 510.0, None), (3, 520.0, None)]),
+       ("smooth", ref + "hopper.wall_spacing=0.5\n", [(1, 561.0, None)])]
+make_store(os.path.join(work, "sens.h5"), pts)
+rc, out, err = run("sensitivity", os.path.join(work, "sens.h5"), "--out", work)
+check(rc == 0, "sensitivity exits 0 (got %d: %s)" % (rc, err))
+check("reference: 3 seeds, 510.0 /s, seed-to-seed sd 10.0 /s = 2.0 %" in out,
+      "sensitivity names the reference and its noise")
+check("| hopper.wall_spacing=0.5 | 561.0 | +10.0 % | +5.1 | -9.1 % |" in out,
+      "sensitivity row of the choice: %s" % [l for l in out.splitlines() if "wall_spacing" in l])
+
+# --- Bad arguments: a file that is not a store.
+bad = os.path.join(work, "not_a_store.h5")
+open(bad, "w").write("hello")
+rc, out, err = run("targets", bad)
+check(rc == 2 and "calibration.py: error" in err, "a non-store exits 2 with a message")
+rc, out, err = run("beverloo", os.path.join(work, "missing.h5"))
+check(rc == 2 and "no store" in err, "a missing store exits 2 with a message")
+
+print("calibration: %d passed, %d failed" % (checks[0] - len(failures), len(failures)))
+sys.exit(1 if failures else 0)
