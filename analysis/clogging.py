@@ -65,11 +65,37 @@ def particle_steps(store):
     return out
 
 
+def edge_disks(pt):
+    """Right-hand edge disk and the next wall disk up the funnel wall (centres, m) and the wall
+    disks' radius, for the default outlet measure (D between the edge disks' surfaces)."""
+    th = float(pt["hopper.theta_rad"])
+    dw = float(pt["hopper.wall_diameter_m"])
+    sp = float(pt.get("hopper.wall_spacing", 1.0))
+    off = float(pt["hopper.edge_offset"]) if "hopper.edge_offset" in pt and \
+        np.isfinite(pt["hopper.edge_offset"]) else 0.0
+    xc = float(pt["hopper.outlet_m"]) / 2 + dw / 2
+    e = (xc + off * dw * math.cos(th), off * dw * math.sin(th))
+    n = (e[0] + sp * dw * math.cos(th), e[1] + sp * dw * math.sin(th))
+    return e, n, dw / 2
+
+
+def foot_in_groove(x, y, edge, nxt, r_wall, r_max):
+    """An arch's end disk at (x, y) touches both the edge disk and the next wall disk (mirrored
+    for x < 0), within 0.1 mm of the largest disk's contact distance."""
+    sx = 1.0 if x > 0 else -1.0
+    reach = r_wall + r_max + 1e-4
+    d_e = math.hypot(x - sx * edge[0], y - edge[1])
+    d_n = math.hypot(x - sx * nxt[0], y - nxt[1])
+    return d_e <= reach and d_n <= reach
+
+
 def arrests(path, out):
     with open_store(path) as s:
         r = s.realizations
         surv = s.survival
         jams = s.jams
+        arches = s.arches
+        pts = s.points
         by_status = r["status"].value_counts().to_dict()
         grown = set()
         for (pt, real), g in jams.groupby(["point", "realization"]):
@@ -80,6 +106,26 @@ def arrests(path, out):
                   "shakes_needed": {int(k): int(v) for k, v in jams["shakes"].value_counts()
                                     .sort_index().items()},
                   "groups": {}}
+        # Where the arches rest: jams whose arch has both end disks in the groove between the
+        # edge disk and the next wall disk, by the shakes the jam needed.
+        feet = {}
+        if len(arches) and len(jams) == len(arches):
+            aj = arches.reset_index(drop=True)
+            jj = jams.reset_index(drop=True)
+            for k in range(len(aj)):
+                pt = pts.loc[int(aj.loc[k, "point"])]
+                edge, nxt, rw = edge_disks(pt)
+                r_max = float(pt["particles.d_large_m"]) / 2
+                xs, ys = aj.loc[k, "x"], aj.loc[k, "y"]
+                cls = "needed 1 shake" if int(jj.loc[k, "shakes"]) <= 1 else "needed more"
+                f = feet.setdefault(cls, {"jams": 0, "arches": 0, "both_feet_in_groove": 0})
+                f["jams"] += 1
+                if len(xs) >= 1:
+                    f["arches"] += 1
+                    if foot_in_groove(xs[0], ys[0], edge, nxt, rw, r_max) and \
+                            foot_in_groove(xs[-1], ys[-1], edge, nxt, rw, r_max):
+                        f["both_feet_in_groove"] += 1
+        result["arch_feet"] = feet
         keys = list(zip(r["point"], r["realization"]))
         for name, keep in (("all", lambda k: True), ("no grown shake", lambda k: k not in grown),
                            ("grown shake", lambda k: k in grown)):
@@ -113,6 +159,9 @@ def arrests(path, out):
         print("%-16s %5d %8d %-34s %.3g%s" % (name, g["realizations"], g["arrested"], fmt(g["tau"]),
                                               g["jams_per_realization"],
                                               " +- %.2g" % se if se else ""))
+    for cls, f in result["arch_feet"].items():
+        print("jams that %s: %d, arches found %d, both end disks in the edge groove %d" % (
+            cls, f["jams"], f["arches"], f["both_feet_in_groove"]))
     for key in ("z_tau", "z_jams_per_realization"):
         if result.get(key) is not None:
             print("%s (grown - no grown) / combined se: %+.2f" % (key, result[key]))
