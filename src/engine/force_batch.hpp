@@ -13,11 +13,13 @@
 // force_batch_impl.hpp holds the passes; force_batch_{baseline,avx2,avx512}.cpp compile it once
 // per instruction set, each in its own namespace; force_batch.cpp picks one at run time.
 
+#include <array>
 #include <cstdint>
 #include <string>
 
 #include "hopper/engine/contact.hpp"
 #include "hopper/engine/system.hpp"
+#include "laws.hpp"
 
 namespace hopper::engine::detail {
 
@@ -51,10 +53,10 @@ struct ForceSums {
 
 using ForceFn = ForceSums (*)(const ForceArgs&);
 
-// The batched pass of one instruction set, by law (0 frictionless, 1 viscous, 2 spring) and
+// The batched pass of one instruction set, by law (its id in the registry, laws.hpp) and
 // whether the contact corrections are on (see pair_force).
 struct ForceTable {
-    ForceFn fn[3][2];
+    std::array<std::array<ForceFn, 2>, law_count> fn;
 };
 
 const ForceTable& force_table_baseline();

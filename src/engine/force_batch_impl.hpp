@@ -267,11 +267,10 @@ ForceSums forces(const ForceArgs& a) {
     return sums;
 }
 
-const ForceTable table = {{
-    {&forces<FrictionlessLaw, false>, &forces<FrictionlessLaw, true>},
-    {&forces<ViscousFrictionLaw, false>, &forces<ViscousFrictionLaw, true>},
-    {&forces<SpringFrictionLaw, false>, &forces<SpringFrictionLaw, true>},
-}};
+// Every registered law (laws.hpp), without and with the contact corrections.
+const ForceTable table = {for_each_law([]<class L>() {
+    return std::array<ForceFn, 2>{&forces<L, false>, &forces<L, true>};
+})};
 
 }  // namespace
 }  // namespace hopper::engine::detail::HOPPER_FORCE_NS

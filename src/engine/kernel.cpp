@@ -4,9 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <type_traits>
 
 #include "force_batch.hpp"
+#include "hopper/core/error.hpp"
+#include "laws.hpp"
 #include "pair_force.hpp"
 
 namespace hopper::engine {
@@ -261,8 +264,7 @@ struct KernelImpl final : System::Kernel {
         if (s.kernel_path_ == KernelPath::reference) {
             sums = two ? reference<true>(a) : reference<false>(a);
         } else {
-            constexpr int law = !Law::has_tangential ? 0 : (!Law::has_history ? 1 : 2);
-            sums = detail::force_table(s.kernel_path_).fn[law][two ? 1 : 0](a);
+            sums = detail::force_table(s.kernel_path_).fn[detail::law_id<Law>][two ? 1 : 0](a);
         }
         s.wall_force_ = Vec2(sums.wall_fx, sums.wall_fy);
         s.contacts_ = sums.contacts;
@@ -377,16 +379,14 @@ std::unique_ptr<System::Kernel> make_kernel_for(Scheme scheme) {
 
 }  // namespace
 
-std::unique_ptr<System::Kernel> detail::make_kernel(LawKind law, Scheme scheme) {
-    switch (law) {
-        case LawKind::frictionless:
-            return make_kernel_for<FrictionlessLaw>(scheme);
-        case LawKind::viscous:
-            return make_kernel_for<ViscousFrictionLaw>(scheme);
-        case LawKind::spring:
-            break;
-    }
-    return make_kernel_for<SpringFrictionLaw>(scheme);
+std::unique_ptr<System::Kernel> detail::make_kernel(int law, Scheme scheme) {
+    // One factory per registered law (laws.hpp), in the registry's order.
+    using Factory = std::unique_ptr<System::Kernel> (*)(Scheme);
+    static constexpr auto factories =
+        for_each_law([]<class L>() -> Factory { return &make_kernel_for<L>; });
+    if (law < 0 || law >= int(factories.size()))
+        throw core::ConfigError("make_kernel: no contact law with id " + std::to_string(law));
+    return factories[std::size_t(law)](scheme);
 }
 
 }  // namespace hopper::engine

@@ -24,10 +24,8 @@ struct System::Kernel {
 };
 
 namespace detail {
-// Which contact law a scene needs: frictionless (no rotation integrated), viscous friction
-// (k_t = 0, no spring history) or the Cundall-Strack spring.
-enum class LawKind { frictionless, viscous, spring };
-std::unique_ptr<System::Kernel> make_kernel(LawKind law, Scheme scheme);
+// The kernel of the contact law with this id in the registry (laws.hpp) and this integrator.
+std::unique_ptr<System::Kernel> make_kernel(int law, Scheme scheme);
 }  // namespace detail
 
 }  // namespace hopper::engine

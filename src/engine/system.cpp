@@ -13,6 +13,7 @@
 #include "force_batch.hpp"
 #include "hopper/core/error.hpp"
 #include "kernel.hpp"
+#include "laws.hpp"
 
 namespace hopper::engine {
 
@@ -43,9 +44,9 @@ System::System(const SystemConfig& config) : config_(config) {
     // One-time dispatch (style.md): frictionless contacts exert no torque, so rotation is not
     // integrated at all; k_t = 0 needs no spring history.
     history_ = friction && spring;
-    kernel_ = detail::make_kernel(!friction ? detail::LawKind::frictionless
-                                  : !spring ? detail::LawKind::viscous
-                                            : detail::LawKind::spring,
+    kernel_ = detail::make_kernel(!friction ? detail::law_id<FrictionlessLaw>
+                                  : !spring ? detail::law_id<ViscousFrictionLaw>
+                                            : detail::law_id<SpringFrictionLaw>,
                                   config_.scheme);
     kernel_path_ = config_.kernel == KernelPath::reference ? KernelPath::reference
                                                            : detail::resolve_kernel(config_.kernel);
