@@ -128,6 +128,9 @@ std::string scene_text(const engine::SceneParams& p) {
         l.add("material.slip_rule", engine::to_string(m.slip_rule));
     if (m.lever_arm != d.material.lever_arm)
         l.add("material.lever_arm", engine::to_string(m.lever_arm));
+    // Issue 28: the normal law, listed only when it is not the linear one.
+    if (m.normal_law != d.material.normal_law)
+        l.add("material.normal_law", engine::to_string(m.normal_law));
     if (m.normal_damping != d.material.normal_damping)
         l.add("material.normal_damping", engine::to_string(m.normal_damping));
     if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);

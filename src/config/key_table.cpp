@@ -128,6 +128,12 @@ const std::vector<KeyDef> table = {
                p.material.lever_arm = choice_of(v, {engine::LeverArm::radius, engine::LeverArm::contact});
            },
            [](const P& p) -> Read { return engine::to_string(p.material.lever_arm); }, "radius,contact"},
+    KeyDef{"material", "normal_law", "material.normal_law", Kind::choice, 0, 0, closed, closed, "",
+           [](P& p, V v) {
+               using L = engine::NormalLaw;
+               p.material.normal_law = choice_of(v, {L::linear, L::hertz});
+           },
+           [](const P& p) -> Read { return engine::to_string(p.material.normal_law); }, "linear,hertz"},
     KeyDef{"material", "normal_damping", "material.normal_damping", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
                using N = engine::NormalDamping;

@@ -70,7 +70,8 @@ HOPPER_HOT_INLINE PairOutput pair_force(const ContactParams& p, double dt, doubl
         const bool fresh = (hx == 0.0) & (hy == 0.0) & (s_n < 0.0);
         dts = fresh ? dt * (frac < 1.0 ? frac : 1.0) : dt;
     }
-    const ContactInput c{nx, ny, overlap, mbar, vx, vy, sx, sy, dts};
+    ContactInput c{nx, ny, overlap, mbar, vx, vy, sx, sy, dts};
+    if constexpr (law_needs_rstar<Law>) c.rstar = q.ri * q.rj / (q.ri + q.rj);
     const ContactOutput f = Law::template evaluate<Select>(p, c, hx, hy);
     PairOutput out;
     out.fx = f.fn * nx + f.ftx;

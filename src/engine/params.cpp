@@ -37,6 +37,50 @@ std::string to_string(LeverArm a) {
     return a == LeverArm::radius ? "radius" : "contact";
 }
 
+std::string to_string(NormalLaw l) {
+    return l == NormalLaw::linear ? "linear" : "hertz";
+}
+
+double hertz_restitution(double alpha) {
+    // RK4 from first contact (xi = 0, xi' = 1) until xi is back at 0; the crossing is located by
+    // linear interpolation between the two steps that bracket it.
+    const auto acc = [alpha](double x, double v) {
+        const double xp = x > 0.0 ? x : 0.0;
+        return -xp * std::sqrt(xp) - alpha * std::sqrt(std::sqrt(xp)) * v;
+    };
+    const double h = 2e-4;
+    double x = 0.0, v = 1.0;
+    for (int k = 0; k < 1000000; ++k) {
+        const double k1x = v, k1v = acc(x, v);
+        const double k2x = v + 0.5 * h * k1v, k2v = acc(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
+        const double k3x = v + 0.5 * h * k2v, k3v = acc(x + 0.5 * h * k2x, v + 0.5 * h * k2v);
+        const double k4x = v + h * k3v, k4v = acc(x + h * k3x, v + h * k3v);
+        const double xn = x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+        const double vn = v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        if (k > 0 && xn <= 0.0) {
+            const double f = x / (x - xn);
+            return -(v + f * (vn - v));
+        }
+        if (vn > 0.0 && k > 10 && vn < 1e-12 && xn < 1e-12) return 0.0;  // stuck: no rebound
+        x = xn;
+        v = vn;
+    }
+    return 0.0;
+}
+
+double hertz_damping_alpha(double e_n) {
+    if (e_n >= 1.0) return 0.0;
+    // e falls from 1 at alpha = 0; bracket, then bisect.
+    double lo = 0.0, hi = 1.0;
+    while (hertz_restitution(hi) > e_n && hi < 1e3)
+        hi *= 2.0;
+    for (int k = 0; k < 60; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (hertz_restitution(mid) > e_n ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
 std::string to_string(NormalDamping d) {
     return d == NormalDamping::nominal ? "nominal" : "exact_restitution";
 }
@@ -191,6 +235,16 @@ void validate_scene(const SceneParams& p) {
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
             " cannot be met with protocol.unjam = refill, which ends every realization at its "
             "first jam; allowed with refill: 0 or 1");
+    if (m.normal_law == NormalLaw::hertz && m.collision_time)
+        throw ConfigError(
+            "parameter material.collision_time_s sets the linear law's stiffness; with "
+            "material.normal_law = hertz the stiffness comes from material.youngs_modulus and "
+            "material.poisson_ratio (leave collision_time_s out)");
+    if (m.normal_law == NormalLaw::hertz && !(m.kt_over_kn > 0.0))
+        throw ConfigError(
+            "parameter material.kt_over_kn = " + std::to_string(m.kt_over_kn) +
+            " is out of range with material.normal_law = hertz: allowed (0, 10] (the Hertz law's "
+            "tangential spring)");
     if (pr.mode == ProtocolMode::published && pr.jams_per_realization != 0)
         throw ConfigError(
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
@@ -241,6 +295,14 @@ DerivedConstants derive_constants(const SceneParams& p) {
             ? hertz_collision_time(c.m_large, s.d_large, mat.youngs_modulus, mat.poisson_ratio, v0)
             : 0.0;
     c.tau_c = mat.collision_time.value_or(c.hertz_time);
+    if (mat.normal_law == NormalLaw::hertz) {
+        // K = (5/3) E sqrt(R*), E = Y / (3 (1 - sigma^2)): for two large disks (R* = d/4) the
+        // undamped collision at v0 lasts exactly the Hertz time above (docs/model.md).
+        c.hertz_k =
+            5.0 / 3.0 * mat.youngs_modulus / (3.0 * (1.0 - mat.poisson_ratio * mat.poisson_ratio));
+        c.hertz_alpha_system = hertz_damping_alpha(mat.system.e_n);
+        c.hertz_alpha_wall = hertz_damping_alpha(mat.wall.e_n);
+    }
     if (!(c.tau_c > 0.0))
         throw core::ConfigError(
             "the collision time could not be derived from the material "

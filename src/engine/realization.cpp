@@ -70,6 +70,14 @@ SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants&
     sc.particle = {c.k_n,      c.gamma_n_system, c.k_t, c.gamma_n_system * gt, p.material.system.mu,
                    spring_only};
     sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall * gt, p.material.wall.mu, spring_only};
+    sc.normal_law = p.material.normal_law;
+    for (auto [cp, alpha] :
+         {std::pair{&sc.particle, c.hertz_alpha_system}, std::pair{&sc.wall, c.hertz_alpha_wall}}) {
+        cp->hertz_k = c.hertz_k;
+        cp->hertz_alpha = alpha;
+        cp->hertz_kt_ratio = p.material.kt_over_kn;
+        cp->hertz_gt_ratio = gt;
+    }
     sc.contact_lever = p.material.lever_arm == LeverArm::contact;
     sc.contact_corrections = p.integrator.contact_corrections;
     return sc;

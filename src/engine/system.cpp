@@ -44,10 +44,15 @@ System::System(const SystemConfig& config) : config_(config) {
     // One-time dispatch (style.md): frictionless contacts exert no torque, so rotation is not
     // integrated at all; k_t = 0 needs no spring history.
     history_ = friction && spring;
-    kernel_ = detail::make_kernel(!friction ? detail::law_id<FrictionlessLaw>
-                                  : !spring ? detail::law_id<ViscousFrictionLaw>
-                                            : detail::law_id<SpringFrictionLaw>,
-                                  config_.scheme);
+    // The Hertz law is named by the scene; among the linear ones the cheapest that is exact for
+    // its coefficients is taken (no friction: no torque to integrate; k_t = 0: no spring).
+    if (config_.normal_law == NormalLaw::hertz) history_ = true;
+    kernel_ =
+        detail::make_kernel(config_.normal_law == NormalLaw::hertz ? detail::law_id<HertzSpringLaw>
+                            : !friction                            ? detail::law_id<FrictionlessLaw>
+                            : !spring ? detail::law_id<ViscousFrictionLaw>
+                                      : detail::law_id<SpringFrictionLaw>,
+                            config_.scheme);
     kernel_path_ = config_.kernel == KernelPath::reference ? KernelPath::reference
                                                            : detail::resolve_kernel(config_.kernel);
 }

@@ -64,7 +64,7 @@ std::vector<Value> candidates(const KeyDef& d, const engine::SceneParams& p) {
                 if (d.kind == Kind::integer) v = std::round(v);
                 const bool above = d.open_lo ? v > d.lo : v >= d.lo;
                 const bool below = d.open_hi ? v < d.hi : v <= d.hi;
-                if (above && below && (!now || v != x)) out.push_back(v);
+                if (above && below && (!now || v != x)) out.emplace_back(std::in_place_index<0>, v);
             }
             break;
         }

@@ -119,6 +119,11 @@ std::vector<Case> cases() {
             SceneParams f = p;
             f.material.system.mu = f.material.wall.mu = 0.0;
             out.push_back({tag + ", frictionless", f});
+            // Issue 28: the Hertz law (its stiffness from the material, not collision_time_s).
+            SceneParams h = p;
+            h.material.normal_law = NormalLaw::hertz;
+            h.material.collision_time.reset();
+            out.push_back({tag + ", Hertz", h});
         }
     SceneParams l = small_hopper();
     l.material.lever_arm = LeverArm::contact;

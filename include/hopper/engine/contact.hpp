@@ -30,6 +30,13 @@ struct ContactParams {
     // While sliding, set the spring alone to the Coulomb limit (xi = -F_t / k_t) instead of
     // spring + dashpot (SlipRule in params.hpp).
     bool slip_spring_only = false;
+    // The Hertz law (HertzSpringLaw; docs/model.md, "The Hertz law"): K = hertz_k sqrt(R*)
+    // (N/m^1.5) for a pair of effective radius R*; the damping's alpha; k_t / (dF_n/dx) and the
+    // tangential damping's share of the normal one.
+    double hertz_k = 0.0;  // N/m^2: (5/3) E, E = Y / (3 (1 - sigma^2))
+    double hertz_alpha = 0.0;
+    double hertz_kt_ratio = 0.0;
+    double hertz_gt_ratio = 0.0;
 };
 
 // Force on particle i from one contact, split into normal and tangential parts.
@@ -63,6 +70,7 @@ struct ContactInput {
     double vx, vy;     // relative contact velocity for the dashpots and the Coulomb cap
     double sx, sy;     // relative contact velocity that grows the spring (= v unless corrected)
     double dt_spring;  // time over which the spring grows this step (dt, or less at onset)
+    double rstar = 0;  // R_i R_j / (R_i + R_j): set only for laws with needs_rstar
 };
 struct ContactOutput {
     double fn;        // signed normal magnitude: the normal force is fn n
@@ -164,6 +172,61 @@ struct SpringFrictionLaw {
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
                                                    const Vec2& n, double overlap, const Vec2& v_ij,
                                                    Vec2& xi, double dt);
+};
+
+// The Hertz law with a Mindlin-type (no-slip) tangential spring (issue 28; docs/model.md, "The
+// Hertz law"): the elastic normal force K x^(3/2) with K = hertz_k sqrt(R*); the damping of
+// Tsuji et al., -alpha sqrt(mbar K) x^(1/4) v_n, whose restitution depends on alpha only (not on
+// the impact speed); a Cundall-Strack tangential spring whose stiffness follows the normal
+// contact's, k_t = hertz_kt_ratio (3/2) K x^(1/2), with the damping hertz_gt_ratio times the
+// normal one and the Coulomb cap and slip rule of SpringFrictionLaw.
+struct HertzSpringLaw {
+    static constexpr bool has_tangential = true;
+    static constexpr bool has_history = true;
+    static constexpr bool needs_rstar = true;
+    template <bool Select = false>
+    HOPPER_HOT_INLINE static ContactOutput evaluate(const ContactParams& p, const ContactInput& c,
+                                                    double& hx, double& hy) {
+        const double K = p.hertz_k * std::sqrt(c.rstar);
+        const double sx = std::sqrt(c.overlap);                         // x^(1/2)
+        const double qx = std::sqrt(sx);                                // x^(1/4)
+        const double eta = p.hertz_alpha * std::sqrt(c.mbar * K) * qx;  // kg/s
+        const double v_n = c.vx * c.nx + c.vy * c.ny;
+        const double fn = K * c.overlap * sx - eta * v_n;
+        const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
+        const double s_n = c.sx * c.nx + c.sy * c.ny;
+        const double stx = c.sx - s_n * c.nx, sty = c.sy - s_n * c.ny;
+        const double n_xi = c.nx * hx + c.ny * hy;
+        double xx = (hx - c.nx * n_xi) + stx * c.dt_spring;
+        double xy = (hy - c.ny * n_xi) + sty * c.dt_spring;
+        const double kt = p.hertz_kt_ratio * 1.5 * K * sx;
+        const double gm = p.hertz_gt_ratio * eta;
+        const double dx = gm * vtx, dy = gm * vty;
+        double ftx = -kt * xx - dx, fty = -kt * xy - dy;
+        const double cap = p.mu * std::abs(fn);
+        const double ft2 = ftx * ftx + fty * fty;
+        const bool slip = ft2 > cap * cap;
+        if (Select || slip) {
+            const double scale = cap / std::sqrt(ft2);
+            const double sfx = ftx * scale, sfy = fty * scale;
+            const double keep = p.slip_spring_only ? 0.0 : 1.0;
+            const double rx = -(sfx + keep * dx);
+            const double ry = -(sfy + keep * dy);
+            xx = slip ? rx / kt : xx;
+            xy = slip ? ry / kt : xy;
+            ftx = slip ? sfx : ftx;
+            fty = slip ? sfy : fty;
+        }
+        hx = xx;
+        hy = xy;
+        return {fn, ftx, fty};
+    }
+};
+
+// Whether a law reads ContactInput::rstar (pair_force computes it only then).
+template <class Law>
+inline constexpr bool law_needs_rstar = requires {
+    Law::needs_rstar;
 };
 
 // The Vec2 form of a law: damping and spring velocities equal, the spring grows over dt.

@@ -39,6 +39,12 @@ enum class LeverArm {
     contact,  // R_i - x/2: the distance to the middle of the overlap
 };
 
+// The normal force law (docs/model.md, "Contact forces"; issue 28).
+enum class NormalLaw {
+    linear,  // F_n = k_n x - gamma_n mbar v_n (the specification; the default)
+    hertz,   // F_n = K x^(3/2) - alpha sqrt(mbar K) x^(1/4) v_n, K from Y and sigma
+};
+
 // How gamma_n follows from e_n.
 enum class NormalDamping {
     nominal,            // gamma_n = -2 ln(e_n) / tau_c (the specification; the default)
@@ -65,6 +71,7 @@ std::string to_string(UnjamMode m);
 std::string to_string(SlipRule r);
 std::string to_string(LeverArm a);
 std::string to_string(NormalDamping d);
+std::string to_string(NormalLaw l);
 
 struct HopperGeometry {
     double width = 43.0 * cm;           // W: total inner width between the side walls
@@ -107,6 +114,7 @@ struct MaterialParams {
     SlipRule slip_rule = SlipRule::spring_and_dashpot;
     LeverArm lever_arm = LeverArm::radius;
     NormalDamping normal_damping = NormalDamping::nominal;
+    NormalLaw normal_law = NormalLaw::linear;
 };
 
 // Default: velocity Verlet at delta = 200, the cheapest setting of bench/accuracy whose every
@@ -188,11 +196,21 @@ struct DerivedConstants {
     double k_t;               // N/m
     double gamma_n_system;    // 1/s, -2 ln(e_n) / tau_c
     double gamma_n_wall;
+    // The Hertz law (normal_law = hertz): K = hertz_k sqrt(R*), and its damping constant for the
+    // particles' and the walls' e_n (hertz_damping_alpha).
+    double hertz_k = 0.0;  // N/m^2
+    double hertz_alpha_system = 0.0, hertz_alpha_wall = 0.0;
     double dt;       // s, tau_c / delta
     double t_check;  // s
 };
 
 DerivedConstants derive_constants(const SceneParams& p);
+
+// The Hertz law's damping: the alpha for which two disks meeting head on rebound with e_n
+// (xi'' = -xi^(3/2) - alpha xi^(1/4) xi', the collision in units where K, mbar and the impact
+// speed are 1: e depends on alpha only), and the restitution of a given alpha.
+double hertz_damping_alpha(double e_n);
+double hertz_restitution(double alpha);
 
 // gamma_n (1/s) for restitution e_n and collision time tau_c in the given damping form.
 double normal_damping_rate(NormalDamping form, double e_n, double tau_c);

@@ -50,6 +50,9 @@ struct SystemConfig {
     // biases of a collision smaller at a given time step (docs/accuracy.md).
     bool contact_corrections = false;
     KernelPath kernel = KernelPath::automatic;
+    // The normal law (params.hpp): hertz takes HertzSpringLaw, with the hertz_* coefficients of
+    // the ContactParams above.
+    NormalLaw normal_law = NormalLaw::linear;
 };
 
 // A particle that left through the removal floor.
