@@ -131,6 +131,7 @@ std::string scene_text(const engine::SceneParams& p) {
     // Issue 28: the normal law, listed only when it is not the linear one.
     if (m.normal_law != d.material.normal_law)
         l.add("material.normal_law", engine::to_string(m.normal_law));
+    if (m.mu_r != d.material.mu_r) l.add("material.mu_r", m.mu_r);
     if (m.normal_damping != d.material.normal_damping)
         l.add("material.normal_damping", engine::to_string(m.normal_damping));
     if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);

@@ -134,6 +134,9 @@ const std::vector<KeyDef> table = {
                p.material.normal_law = choice_of(v, {L::linear, L::hertz});
            },
            [](const P& p) -> Read { return engine::to_string(p.material.normal_law); }, "linear,hertz"},
+    KeyDef{"material", "mu_r", "material.mu_r", Kind::real, 0, 1, closed, closed, "",
+           [](P& p, V v) { p.material.mu_r = num(v); },
+           [](const P& p) -> Read { return p.material.mu_r; }},
     KeyDef{"material", "normal_damping", "material.normal_damping", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
                using N = engine::NormalDamping;

@@ -20,7 +20,8 @@ struct LawList {
 };
 
 // The registry. The order is the law's id (law_id<Law>); it is not stored anywhere.
-using Laws = LawList<FrictionlessLaw, ViscousFrictionLaw, SpringFrictionLaw, HertzSpringLaw>;
+using Laws = LawList<FrictionlessLaw, ViscousFrictionLaw, SpringFrictionLaw, HertzSpringLaw,
+                     WithRolling<SpringFrictionLaw>, WithRolling<HertzSpringLaw>>;
 inline constexpr std::size_t law_count = Laws::size;
 
 namespace laws_impl {

@@ -79,6 +79,12 @@ HOPPER_HOT_INLINE PairOutput pair_force(const ContactParams& p, double dt, doubl
     const double cr = rot ? nx * f.fty - ny * f.ftx : 0.0;  // n x F_t
     out.ti = li * cr;
     out.tj = lj * cr;
+    if constexpr (law_resists_rolling<Law>) {
+        // Each particle's torque changes by -t: i gets +M, j gets -M.
+        const double M = rolling_torque(p.mu_r, c.rstar, f.fn, q.wi - q.wj);
+        out.ti -= M;
+        out.tj += M;
+    }
     out.overlap = overlap;
     return out;
 }

@@ -240,6 +240,11 @@ void validate_scene(const SceneParams& p) {
             "parameter material.collision_time_s sets the linear law's stiffness; with "
             "material.normal_law = hertz the stiffness comes from material.youngs_modulus and "
             "material.poisson_ratio (leave collision_time_s out)");
+    require_range("material.mu_r", m.mu_r, 0.0, 1.0);
+    if (m.mu_r > 0.0 && !(m.kt_over_kn > 0.0 && (m.system.mu > 0.0 || m.wall.mu > 0.0)))
+        throw ConfigError("parameter material.mu_r = " + std::to_string(m.mu_r) +
+                          " needs the tangential spring of friction (material.kt_over_kn > 0 "
+                          "and material.mu or walls.mu > 0): rolling resistance acts on rolling");
     if (m.normal_law == NormalLaw::hertz && !(m.kt_over_kn > 0.0))
         throw ConfigError(
             "parameter material.kt_over_kn = " + std::to_string(m.kt_over_kn) +

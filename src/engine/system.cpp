@@ -46,13 +46,19 @@ System::System(const SystemConfig& config) : config_(config) {
     history_ = friction && spring;
     // The Hertz law is named by the scene; among the linear ones the cheapest that is exact for
     // its coefficients is taken (no friction: no torque to integrate; k_t = 0: no spring).
-    if (config_.normal_law == NormalLaw::hertz) history_ = true;
-    kernel_ =
-        detail::make_kernel(config_.normal_law == NormalLaw::hertz ? detail::law_id<HertzSpringLaw>
-                            : !friction                            ? detail::law_id<FrictionlessLaw>
-                            : !spring ? detail::law_id<ViscousFrictionLaw>
-                                      : detail::law_id<SpringFrictionLaw>,
-                            config_.scheme);
+    // Rolling resistance takes the spring laws' rolling variants.
+    const bool hertz = config_.normal_law == NormalLaw::hertz;
+    if (config_.rolling && !hertz && !(friction && spring))
+        throw core::ConfigError(
+            "System: rolling resistance needs tangential springs (k_t > 0 and mu > 0)");
+    if (hertz) history_ = true;
+    const int law = hertz ? (config_.rolling ? detail::law_id<WithRolling<HertzSpringLaw>>
+                                             : detail::law_id<HertzSpringLaw>)
+                    : config_.rolling ? detail::law_id<WithRolling<SpringFrictionLaw>>
+                    : !friction       ? detail::law_id<FrictionlessLaw>
+                    : !spring         ? detail::law_id<ViscousFrictionLaw>
+                                      : detail::law_id<SpringFrictionLaw>;
+    kernel_ = detail::make_kernel(law, config_.scheme);
     kernel_path_ = config_.kernel == KernelPath::reference ? KernelPath::reference
                                                            : detail::resolve_kernel(config_.kernel);
 }

@@ -124,6 +124,12 @@ std::vector<Case> cases() {
             h.material.normal_law = NormalLaw::hertz;
             h.material.collision_time.reset();
             out.push_back({tag + ", Hertz", h});
+            // Rolling resistance on the spring law and on the Hertz law.
+            SceneParams r = p;
+            r.material.mu_r = 0.1;
+            out.push_back({tag + ", spring friction, rolling resistance", r});
+            h.material.mu_r = 0.1;
+            out.push_back({tag + ", Hertz, rolling resistance", h});
         }
     SceneParams l = small_hopper();
     l.material.lever_arm = LeverArm::contact;

@@ -37,6 +37,9 @@ struct ContactParams {
     double hertz_alpha = 0.0;
     double hertz_kt_ratio = 0.0;
     double hertz_gt_ratio = 0.0;
+    // Rolling resistance (WithRolling; docs/model.md, "Rolling resistance"): the coefficient
+    // mu_r of the constant resisting torque mu_r R* |F_n|.
+    double mu_r = 0.0;
 };
 
 // Force on particle i from one contact, split into normal and tangential parts.
@@ -223,11 +226,34 @@ struct HertzSpringLaw {
     }
 };
 
-// Whether a law reads ContactInput::rstar (pair_force computes it only then).
+// Rolling resistance on top of a law with tangential forces (issue 28; docs/model.md, "Rolling
+// resistance"): a constant torque of magnitude mu_r R* |F_n| against the relative rolling
+// w_i - w_j (the "type A" model of Ai et al., Powder Technol. 206, 269 (2011)), on i and the
+// opposite on j; none when w_i = w_j exactly. pair_force adds it (rolling_torque below).
+template <class Base>
+struct WithRolling : Base {
+    static_assert(Base::has_tangential, "rolling resistance needs a law with torques");
+    static constexpr bool needs_rstar = true;
+    static constexpr bool rolling = true;
+};
+
+// Whether a law reads ContactInput::rstar (pair_force computes it only then), and whether it
+// resists rolling.
 template <class Law>
 inline constexpr bool law_needs_rstar = requires {
     Law::needs_rstar;
 };
+template <class Law>
+inline constexpr bool law_resists_rolling = requires {
+    Law::rolling;
+};
+
+// The rolling resistance torque on i: -mu_r R* |F_n| sign(w_i - w_j) (0 at w_i = w_j). A select,
+// not a branch, so that the batched passes vectorize.
+HOPPER_HOT_INLINE double rolling_torque(double mu_r, double rstar, double fn, double w_rel) {
+    const double m = mu_r * rstar * std::abs(fn);
+    return w_rel > 0.0 ? -m : (w_rel < 0.0 ? m : 0.0);
+}
 
 // The Vec2 form of a law: damping and spring velocities equal, the spring grows over dt.
 template <class Law>

@@ -115,6 +115,9 @@ struct MaterialParams {
     LeverArm lever_arm = LeverArm::radius;
     NormalDamping normal_damping = NormalDamping::nominal;
     NormalLaw normal_law = NormalLaw::linear;
+    // Rolling resistance (issue 28): the coefficient of the torque mu_r R* |F_n| against the
+    // relative rolling of two touching disks (particles and walls); 0 = none.
+    double mu_r = 0.0;
 };
 
 // Default: velocity Verlet at delta = 200, the cheapest setting of bench/accuracy whose every

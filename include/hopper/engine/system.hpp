@@ -53,6 +53,8 @@ struct SystemConfig {
     // The normal law (params.hpp): hertz takes HertzSpringLaw, with the hertz_* coefficients of
     // the ContactParams above.
     NormalLaw normal_law = NormalLaw::linear;
+    // Rolling resistance (ContactParams::mu_r > 0): the registry's WithRolling variant of the law.
+    bool rolling = false;
 };
 
 // A particle that left through the removal floor.
