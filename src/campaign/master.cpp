@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <map>
 #include <set>
@@ -47,8 +48,12 @@ struct Busy {
     double saved_seconds = 0.0;  // seconds of this attempt kept in its latest checkpoint
 };
 
+// Clamped to +-30 years: a deadline far ahead (9999-12-31) would overflow the clock's 64-bit
+// nanoseconds and come out negative, a wait of zero (busy polling) and a drain ending at once.
 Clock::duration to_duration(double seconds) {
-    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    constexpr double limit = 1e9;
+    const double s = std::isnan(seconds) ? 0.0 : std::clamp(seconds, -limit, limit);
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
 // One run of the master: the queue, the workers' states, the checkpoint bookkeeping and the
@@ -83,7 +88,7 @@ class Dispatcher {
     void on_reply(int worker, const Message& m);
     void on_error(int worker, const Item& item, const Busy& was, const Message& m);
     void on_interrupted(int worker, const Item& item, const Busy& was, const Message& m);
-    void accept_result(int worker, const Item& item, const Message& m);
+    void accept_result(int worker, const Item& item, const Message& m, bool resumed);
     void record_error(int worker, const Item& item, const std::string& reason);
 
     // Helpers.
@@ -448,7 +453,7 @@ void Dispatcher::on_late_reply(int worker, const Message& m) {
     revived_.erase(worker);
     idle_.push_back(worker);
     if (todo_[item.index].task_id == m.task && m.kind == MessageKind::result)
-        accept_result(worker, item, m);
+        accept_result(worker, item, m, false);
 }
 
 // The reply of a busy worker: a result, an error or an interruption; the worker is idle again.
@@ -466,7 +471,7 @@ void Dispatcher::on_reply(int worker, const Message& m) {
     update_running();
     switch (m.kind) {
         case MessageKind::result:
-            accept_result(worker, item, m);
+            accept_result(worker, item, m, was.resumed);
             break;
         case MessageKind::error:
             on_error(worker, item, was, m);
@@ -513,7 +518,7 @@ void Dispatcher::on_interrupted(int worker, const Item& item, const Busy& was, c
 
 // A result for item from worker: checked, then stored unless this run stored one already (a
 // reassigned realization), in which case it is compared with it.
-void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
+void Dispatcher::accept_result(int worker, const Item& item, const Message& m, bool resumed) {
     const TaskRef& t = todo_[item.index];
     engine::RealizationResult r;
     try {
@@ -523,6 +528,22 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
                                    std::to_string(r.seed) + ", expected " + std::to_string(t.seed));
     } catch (const core::StoreError& e) {
         if (!finished_[item.index]) record_error(worker, item, e.what());
+        return;
+    }
+    // A realization that failed after continuing from its checkpoint: the state may be what
+    // failed (a valid checksum over a wrong state). Its file goes and the realization starts
+    // over from its beginning; the fresh attempt's outcome is what is stored.
+    if (resumed && ckpt_ && r.status == engine::Status::failed && !finished_[item.index]) {
+        ckpt_->remove(key_of(item));
+        saved_before_[item.index] = 0.0;
+        report_.lost_worker_seconds += m.seconds;
+        log_ << "campaign: '" << t.label << "' #" << t.realization
+             << " failed after continuing from its checkpoint (" << r.message
+             << "); the checkpoint is removed and the realization "
+             << (draining_ ? "starts from its beginning on resume"
+                           : "starts again from its beginning")
+             << std::endl;
+        if (!draining_) queue_.push_front({item.index, item.attempt + 1});
         return;
     }
     if (finished_[item.index]) {
