@@ -486,9 +486,25 @@ void Dispatcher::on_reply(int worker, const Message& m) {
 }
 
 void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const Message& m) {
+    const std::string what(m.payload.begin(), m.payload.end());
+    // The engine refused the checkpoint's state (issue 29, item 1): not an error of the
+    // realization, which starts again from its beginning.
+    if (ckpt_ && was.resumed && what.starts_with(checkpoint_refused)) {
+        ckpt_->remove(key_of(item));
+        saved_before_[item.index] = 0.0;
+        --report_.resumed;
+        if (finished_[item.index]) return;
+        log_ << "campaign: " << what.substr(checkpoint_refused.size()) << ": the checkpoint of '"
+             << todo_[item.index].label << "' #" << todo_[item.index].realization
+             << " is removed and the realization "
+             << (draining_ ? "starts from its beginning on resume"
+                           : "starts again from its beginning")
+             << std::endl;
+        if (!draining_) queue_.push_front({item.index, item.attempt + 1});
+        return;
+    }
     // The other copy of a reassigned realization was stored already.
-    if (!finished_[item.index])
-        record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
+    if (!finished_[item.index]) record_error(worker, item, what);
     // A state that made its realization raise must not be tried again.
     if (ckpt_ && was.resumed && !finished_[item.index]) {
         ckpt_->remove(key_of(item));

@@ -383,6 +383,18 @@ StoreStatus read_status(const fs::path& store) {
     s.store = store;
     s.writer_active = journal_locked(jpath);
     s.hdf5_in_step = !s.writer_active && state.closed_in_step() && fs::exists(store, ec);
+    if (s.hdf5_in_step) {
+        // The journal says the file was closed in step; the file must agree (issue 29, item 5:
+        // a write of /analysis that failed, on a full disk, leaves it marked inconsistent, or
+        // of another size than the last sync record says).
+        const h5::QuietErrors quiet;
+        const layout::Inspection in = layout::inspect(store);
+        const auto& sync = *state.last_sync;
+        const auto size = fs::file_size(store, ec);
+        s.hdf5_in_step = in.readable && in.consistent && in.token == sync.token &&
+                         in.journal_bytes == state.last_offset &&
+                         (!sync.file || (!ec && size == sync.file->bytes));
+    }
     s.journal_bytes = scan.valid_bytes;
     s.torn_bytes = scan.torn_bytes();
     s.plan = std::move(state.plan);

@@ -602,8 +602,9 @@ TEST(MasterDeadline, ShortTasksRunAndARunningOneIsStoppedAtTheDeadline) {
 }
 
 // Issue 29, item 1: a realization that fails after continuing from its checkpoint (the state
-// had a valid checksum but was wrong) is not stored as failed: the file goes and the
-// realization starts over from its beginning, whose outcome is stored.
+// had a valid checksum but was wrong) is not stored as failed, and one whose state the engine
+// refuses is not an error: either way the file goes and the realization starts over from its
+// beginning, whose outcome is stored.
 TEST(MasterCheckpoint, AFailureAfterContinuingFromACheckpointRestartsFromTheBeginning) {
     const fs::path dir = scratch();
     store::Store st(dir / "s.h5");
@@ -622,7 +623,8 @@ TEST(MasterCheckpoint, AFailureAfterContinuingFromACheckpointRestartsFromTheBegi
     CheckpointFiles files(dir / "s.h5", "test");
     const std::vector<std::uint8_t> state{1, 2, 3};
     files.write(CheckpointKey{a.label, 0, 1000, a.physics_hash()}, 5.0, state);
-    ASSERT_EQ(files.count(), 1);
+    files.write(CheckpointKey{a.label, 1, 1001, a.physics_hash()}, 5.0, state);
+    ASSERT_EQ(files.count(), 2);
 
     InProcessChannels channels(1);
     std::mutex mutex;
@@ -637,7 +639,11 @@ TEST(MasterCheckpoint, AFailureAfterContinuingFromACheckpointRestartsFromTheBegi
                     std::lock_guard lock(mutex);
                     state_sizes.push_back(s.size());
                 }
-                // Continued from the state: fails; from the beginning: completes.
+                // Task 1's state is refused by the engine (the runner of run.cpp says so).
+                if (task == 1 && !s.empty())
+                    throw std::runtime_error(std::string(checkpoint_refused) +
+                                             "the checkpoint's state is inconsistent (test)");
+                // Task 0's continues and fails; from the beginning both complete.
                 return fake_result(todo.at(std::size_t(task)).seed,
                                    s.empty() ? engine::Status::complete : engine::Status::failed);
             },
@@ -656,6 +662,12 @@ TEST(MasterCheckpoint, AFailureAfterContinuingFromACheckpointRestartsFromTheBegi
     worker.join();
     EXPECT_EQ(rep.stored, 2);
     EXPECT_EQ(rep.failed, 0);
+    EXPECT_EQ(rep.errors, 0);
+    EXPECT_EQ(st.task(a.label, 1)->state, store::TaskState::done);
+    EXPECT_EQ(st.task(a.label, 1)->errors, 0);
+    EXPECT_NE(log.str().find("the checkpoint's state is inconsistent (test): the checkpoint of"),
+              std::string::npos)
+        << log.str();
     ASSERT_EQ(state_sizes.size(), 2u);
     EXPECT_EQ(state_sizes[0], state.size());
     EXPECT_EQ(state_sizes[1], 0u);
