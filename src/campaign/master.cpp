@@ -90,6 +90,7 @@ class Dispatcher {
     void on_interrupted(int worker, const Item& item, const Busy& was, const Message& m);
     void accept_result(int worker, const Item& item, const Message& m, bool resumed);
     void record_error(int worker, const Item& item, const std::string& reason);
+    void restart_without_checkpoint(const Item& item, const std::string& what);
 
     // Helpers.
     CheckpointKey key_of(const Item& item) const;
@@ -490,17 +491,14 @@ void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const M
     // The engine refused the checkpoint's state (issue 29, item 1): not an error of the
     // realization, which starts again from its beginning.
     if (ckpt_ && was.resumed && what.starts_with(checkpoint_refused)) {
-        ckpt_->remove(key_of(item));
-        saved_before_[item.index] = 0.0;
         --report_.resumed;
-        if (finished_[item.index]) return;
-        log_ << "campaign: " << what.substr(checkpoint_refused.size()) << ": the checkpoint of '"
-             << todo_[item.index].label << "' #" << todo_[item.index].realization
-             << " is removed and the realization "
-             << (draining_ ? "starts from its beginning on resume"
-                           : "starts again from its beginning")
-             << std::endl;
-        if (!draining_) queue_.push_front({item.index, item.attempt + 1});
+        if (finished_[item.index])
+            ckpt_->remove(key_of(item));
+        else
+            restart_without_checkpoint(item, std::string(what.substr(checkpoint_refused.size())) +
+                                                 ": the checkpoint of '" + todo_[item.index].label +
+                                                 "' #" +
+                                                 std::to_string(todo_[item.index].realization));
         return;
     }
     // The other copy of a reassigned realization was stored already.
@@ -550,16 +548,10 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
     // failed (a valid checksum over a wrong state). Its file goes and the realization starts
     // over from its beginning; the fresh attempt's outcome is what is stored.
     if (resumed && ckpt_ && r.status == engine::Status::failed && !finished_[item.index]) {
-        ckpt_->remove(key_of(item));
-        saved_before_[item.index] = 0.0;
         report_.lost_worker_seconds += m.seconds;
-        log_ << "campaign: '" << t.label << "' #" << t.realization
-             << " failed after continuing from its checkpoint (" << r.message
-             << "); the checkpoint is removed and the realization "
-             << (draining_ ? "starts from its beginning on resume"
-                           : "starts again from its beginning")
-             << std::endl;
-        if (!draining_) queue_.push_front({item.index, item.attempt + 1});
+        restart_without_checkpoint(item, "'" + t.label + "' #" + std::to_string(t.realization) +
+                                             " failed after continuing from its checkpoint (" +
+                                             r.message + "); the checkpoint");
         return;
     }
     if (finished_[item.index]) {
@@ -591,6 +583,17 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
         ++report_.failed;
         ++failed_now_;
     }
+}
+
+// A checkpoint that must not be continued from (`what` names it and why): its file goes and the
+// realization starts again from its beginning, now or (draining) in the next run.
+void Dispatcher::restart_without_checkpoint(const Item& item, const std::string& what) {
+    ckpt_->remove(key_of(item));
+    saved_before_[item.index] = 0.0;
+    log_ << "campaign: " << what << " is removed and the realization "
+         << (draining_ ? "starts from its beginning on resume" : "starts again from its beginning")
+         << std::endl;
+    if (!draining_) queue_.push_front({item.index, item.attempt + 1});
 }
 
 // An attempt that raised: logged in the store, retried once more unless draining or out of

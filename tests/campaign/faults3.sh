@@ -37,21 +37,10 @@ wait "$JOB"
 victim=$(ls "$STORE.checkpoints"/*.ckpt | head -1)
 [ -n "$victim" ] || fail "no checkpoint after SIGTERM"
 "$PY" - "$victim" <<'PY' || fail "breaking the checkpoint's state"
-import struct, sys
-def crc32c(data):
-    table = []
-    for i in range(256):
-        c = i
-        for _ in range(8):
-            c = (c >> 1) ^ 0x82F63B78 if c & 1 else c >> 1
-        table.append(c)
-    c = 0xFFFFFFFF
-    for b in data:
-        c = table[(c ^ b) & 0xFF] ^ (c >> 8)
-    return c ^ 0xFFFFFFFF
-b = bytearray(open(sys.argv[1], "rb").read())
-body = b[:-4]
-assert struct.unpack("<I", b[-4:])[0] == crc32c(body), "checksum layout"
+import os, struct, sys
+sys.path.insert(0, os.path.join(os.environ["SRC"], "tests", "campaign"))
+from ckpt_file import read_body, write_body
+body = bytearray(read_body(sys.argv[1]))
 u64 = lambda o: struct.unpack_from("<Q", body, o)[0]
 i32 = lambda o: struct.unpack_from("<i", body, o)[0]
 # The neighbour list: row starts (n + 1 ints from 0, non-decreasing), the partner list (as long
@@ -73,7 +62,7 @@ for o in range(0, len(body) - 16):
     break
 assert found is not None, "no neighbour list found in the checkpoint"
 struct.pack_into("<i", body, found + 4 * 3, -1000000)
-open(sys.argv[1], "wb").write(bytes(body) + struct.pack("<I", crc32c(bytes(body))))
+write_body(sys.argv[1], body)
 PY
 run_expect 0 rerun "$EXE" run "$SWEEP" --store "$STORE" --progress-interval 0 --threads 2
 expect_in rerun.err "the checkpoint's state is inconsistent (a neighbour list row start"
