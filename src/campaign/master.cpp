@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <map>
 #include <set>
@@ -47,8 +48,12 @@ struct Busy {
     double saved_seconds = 0.0;  // seconds of this attempt kept in its latest checkpoint
 };
 
+// Clamped to +-30 years: a deadline far ahead (9999-12-31) would overflow the clock's 64-bit
+// nanoseconds and come out negative, a wait of zero (busy polling) and a drain ending at once.
 Clock::duration to_duration(double seconds) {
-    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    constexpr double limit = 1e9;
+    const double s = std::isnan(seconds) ? 0.0 : std::clamp(seconds, -limit, limit);
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
 // One run of the master: the queue, the workers' states, the checkpoint bookkeeping and the
@@ -83,8 +88,9 @@ class Dispatcher {
     void on_reply(int worker, const Message& m);
     void on_error(int worker, const Item& item, const Busy& was, const Message& m);
     void on_interrupted(int worker, const Item& item, const Busy& was, const Message& m);
-    void accept_result(int worker, const Item& item, const Message& m);
+    void accept_result(int worker, const Item& item, const Message& m, bool resumed);
     void record_error(int worker, const Item& item, const std::string& reason);
+    void restart_without_checkpoint(const Item& item, const std::string& what);
 
     // Helpers.
     CheckpointKey key_of(const Item& item) const;
@@ -448,7 +454,7 @@ void Dispatcher::on_late_reply(int worker, const Message& m) {
     revived_.erase(worker);
     idle_.push_back(worker);
     if (todo_[item.index].task_id == m.task && m.kind == MessageKind::result)
-        accept_result(worker, item, m);
+        accept_result(worker, item, m, false);
 }
 
 // The reply of a busy worker: a result, an error or an interruption; the worker is idle again.
@@ -466,7 +472,7 @@ void Dispatcher::on_reply(int worker, const Message& m) {
     update_running();
     switch (m.kind) {
         case MessageKind::result:
-            accept_result(worker, item, m);
+            accept_result(worker, item, m, was.resumed);
             break;
         case MessageKind::error:
             on_error(worker, item, was, m);
@@ -481,9 +487,22 @@ void Dispatcher::on_reply(int worker, const Message& m) {
 }
 
 void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const Message& m) {
+    const std::string what(m.payload.begin(), m.payload.end());
+    // The engine refused the checkpoint's state (issue 29, item 1): not an error of the
+    // realization, which starts again from its beginning.
+    if (ckpt_ && was.resumed && what.starts_with(checkpoint_refused)) {
+        --report_.resumed;
+        if (finished_[item.index])
+            ckpt_->remove(key_of(item));
+        else
+            restart_without_checkpoint(item, std::string(what.substr(checkpoint_refused.size())) +
+                                                 ": the checkpoint of '" + todo_[item.index].label +
+                                                 "' #" +
+                                                 std::to_string(todo_[item.index].realization));
+        return;
+    }
     // The other copy of a reassigned realization was stored already.
-    if (!finished_[item.index])
-        record_error(worker, item, std::string(m.payload.begin(), m.payload.end()));
+    if (!finished_[item.index]) record_error(worker, item, what);
     // A state that made its realization raise must not be tried again.
     if (ckpt_ && was.resumed && !finished_[item.index]) {
         ckpt_->remove(key_of(item));
@@ -513,7 +532,7 @@ void Dispatcher::on_interrupted(int worker, const Item& item, const Busy& was, c
 
 // A result for item from worker: checked, then stored unless this run stored one already (a
 // reassigned realization), in which case it is compared with it.
-void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
+void Dispatcher::accept_result(int worker, const Item& item, const Message& m, bool resumed) {
     const TaskRef& t = todo_[item.index];
     engine::RealizationResult r;
     try {
@@ -523,6 +542,16 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
                                    std::to_string(r.seed) + ", expected " + std::to_string(t.seed));
     } catch (const core::StoreError& e) {
         if (!finished_[item.index]) record_error(worker, item, e.what());
+        return;
+    }
+    // A realization that failed after continuing from its checkpoint: the state may be what
+    // failed (a valid checksum over a wrong state). Its file goes and the realization starts
+    // over from its beginning; the fresh attempt's outcome is what is stored.
+    if (resumed && ckpt_ && r.status == engine::Status::failed && !finished_[item.index]) {
+        report_.lost_worker_seconds += m.seconds;
+        restart_without_checkpoint(item, "'" + t.label + "' #" + std::to_string(t.realization) +
+                                             " failed after continuing from its checkpoint (" +
+                                             r.message + "); the checkpoint");
         return;
     }
     if (finished_[item.index]) {
@@ -554,6 +583,17 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
         ++report_.failed;
         ++failed_now_;
     }
+}
+
+// A checkpoint that must not be continued from (`what` names it and why): its file goes and the
+// realization starts again from its beginning, now or (draining) in the next run.
+void Dispatcher::restart_without_checkpoint(const Item& item, const std::string& what) {
+    ckpt_->remove(key_of(item));
+    saved_before_[item.index] = 0.0;
+    log_ << "campaign: " << what << " is removed and the realization "
+         << (draining_ ? "starts from its beginning on resume" : "starts again from its beginning")
+         << std::endl;
+    if (!draining_) queue_.push_front({item.index, item.attempt + 1});
 }
 
 // An attempt that raised: logged in the store, retried once more unless draining or out of

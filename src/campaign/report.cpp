@@ -9,6 +9,7 @@ namespace hopper::campaign {
 
 std::string format_duration(double s) {
     if (!std::isfinite(s) || s < 0) return "?";
+    if (s >= 1e12) return "over 30000 years";  // and no overflow of the integer below
     const long long t = std::llround(s);
     char buf[32];
     if (t < 60)

@@ -6,6 +6,8 @@
 #include <atomic>
 #include <map>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "hopper/campaign/adaptive.hpp"
@@ -103,9 +105,11 @@ ResumableTaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
         if (!state.empty()) {
             try {
                 return engine::resume_realization(scene, t.seed, state, hooks);
-            } catch (const core::ConfigError&) {
-                // The master checked the file's code version and physics; a state the engine
-                // still refuses (another engine format) is dropped: the realization starts over.
+            } catch (const core::ConfigError& e) {
+                // The master checked the file's code version, physics and checksum; a state the
+                // engine still refuses (another engine format, a broken invariant) goes back to
+                // the master with the reason: it removes the file and restarts the realization.
+                throw std::runtime_error(std::string(checkpoint_refused) + e.what());
             }
         }
         return engine::run_realization(scene, t.seed, hooks);
@@ -186,6 +190,11 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     SignalWatcher signals;
     // Before the store is touched: a deadline that cannot be known is an error.
     const std::optional<double> deadline = opt.deadline ? opt.deadline(err) : std::nullopt;
+    // A deadline already past: nothing could end before it (issue 29, item 4).
+    if (deadline && *deadline <= store::unix_now())
+        throw core::ConfigError("the deadline has already passed (" +
+                                format_duration(store::unix_now() - *deadline) +
+                                " ago): no realization is started; give a later --deadline");
     store::Store st(store_path, opt.store_options);
     for (const auto& n : st.notes())
         err << "campaign: note: " << n << '\n';

@@ -174,7 +174,7 @@ void write_analysis(std::ostream& out, const Analysis& a) {
 }
 
 int analyze_store(const fs::path& store, bool json, bool write, std::ostream& out,
-                  std::ostream& err) {
+                  std::ostream& err, bool* written) {
     const analysis::StoreAnalysis result = analysis::analyze_store(store);
     const Analysis& a = result.analysis;
     if (json)
@@ -197,6 +197,7 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
         err << "campaign: analysis not written into the store: " << e.what() << std::endl;
         return exit_error;
     }
+    if (written) *written = true;
     if (!json) out << "analysis written to " << store.string() << ":/analysis\n";
     return code;
 }

@@ -17,9 +17,10 @@ namespace hopper::cli {
 void write_analysis(std::ostream& out, const analysis::Analysis& a);
 
 // Reads the store (its journal: the source of truth), analyzes it, prints tables (or JSON) on
-// `out`, and when `write` replaces /analysis in the HDF5 file. Returns the exit code.
+// `out`, and when `write` replaces /analysis in the HDF5 file (then *written, if given, says
+// whether it was). Returns the exit code.
 int analyze_store(const std::filesystem::path& store, bool json, bool write, std::ostream& out,
-                  std::ostream& err);
+                  std::ostream& err, bool* written = nullptr);
 
 void print_analyze_help(std::ostream& os);
 int analyze_command(const std::vector<std::string>& args);

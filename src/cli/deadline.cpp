@@ -1,5 +1,6 @@
 #include "cli/deadline.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -14,11 +15,47 @@ namespace {
 
 const char* forms =
     "allowed: none, slurm, slurm-SECONDS (the job's end time minus SECONDS), "
-    "@SECONDS_SINCE_1970, an ISO 8601 UTC time such as "
-    "2026-11-24T15:00:00Z, or a time from now such as +3600, +90m, +2h, +1:30:00";
+    "@SECONDS_SINCE_1970, an ISO 8601 time such as 2026-11-24T15:00:00Z or "
+    "2026-11-24T16:00:00+01:00, or a time from now such as +3600, +90m, +2h, +1:30:00; "
+    "no later than 9999-12-31T23:59:59Z";
+
+// 9999-12-31T23:59:59Z: the latest deadline taken (an ISO 8601 year has four digits); later
+// ones are typing errors, and beyond about 2^63 ns every clock of the master would overflow.
+constexpr double latest = 253402300799.0;
 
 [[noreturn]] void bad(const std::string& text, const std::string& why) {
     throw core::ConfigError("--deadline '" + text + "': " + why + " (" + forms + ")");
+}
+
+// A number the regular expressions matched (digits, maybe a fraction): one too large for a
+// double, or for a deadline, is refused like any other bad value.
+double number(const std::string& text, const std::string& digits) {
+    if (digits.size() > 30) bad(text, "the number is too large");
+    return std::strtod(digits.c_str(), nullptr);
+}
+
+// A deadline in range: finite, not after `latest`.
+double checked(const std::string& text, double t) {
+    if (!std::isfinite(t) || t > latest) bad(text, "later than the year 9999");
+    return t;
+}
+
+// Seconds since 1970 of a calendar date and time in UTC, or nullopt when the date does not exist
+// (2026-02-31, 2026-13-01, 24:00:00): timegm normalizes those, so the fields must come back.
+std::optional<double> utc_seconds(int y, int mo, int d, int h, int mi, int s) {
+    std::tm tm{};
+    tm.tm_year = y - 1900;
+    tm.tm_mon = mo - 1;
+    tm.tm_mday = d;
+    tm.tm_hour = h;
+    tm.tm_min = mi;
+    tm.tm_sec = s;
+    const std::time_t t = timegm(&tm);
+    std::tm back{};
+    if (!gmtime_r(&t, &back) || back.tm_year != y - 1900 || back.tm_mon != mo - 1 ||
+        back.tm_mday != d || back.tm_hour != h || back.tm_min != mi || back.tm_sec != s)
+        return std::nullopt;
+    return static_cast<double>(t);
 }
 
 }  // namespace
@@ -61,29 +98,36 @@ std::optional<double> parse_deadline(const std::string& text, double now) {
         double before = 0.0;
         if (text != "slurm") {
             const std::string unit = m[3].str();
-            before = std::stod(m[1].str()) * (unit == "m" ? 60.0 : unit == "h" ? 3600.0 : 1.0);
+            before = number(text, m[1].str()) * (unit == "m" ? 60.0 : unit == "h" ? 3600.0 : 1.0);
         }
         std::string why;
         if (auto t = slurm_job_end(&why)) return *t - before;
         bad(text, "the Slurm job's end time is unknown: " + why);
     }
     if (std::regex_match(text, m, std::regex(R"(@([0-9]+(\.[0-9]+)?))")))
-        return std::stod(m[1].str());
-    if (std::regex_match(text,
-                         std::regex(R"([0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}Z)"))) {
-        std::tm tm{};
-        if (!strptime(text.c_str(), "%Y-%m-%dT%H:%M:%SZ", &tm)) bad(text, "not a valid time");
-        return static_cast<double>(timegm(&tm));
+        return checked(text, number(text, m[1].str()));
+    if (std::regex_match(text, m,
+                         std::regex(R"(([0-9]{4})-([0-9]{2})-([0-9]{2})T([0-9]{2}):([0-9]{2}):)"
+                                    R"(([0-9]{2})(Z|([+-])([0-9]{2}):([0-9]{2})))"))) {
+        auto field = [&](int k) { return std::stoi(m[k].str()); };
+        const auto t = utc_seconds(field(1), field(2), field(3), field(4), field(5), field(6));
+        if (!t) bad(text, "not a valid date and time (no such day, hour, minute or second)");
+        double offset = 0.0;  // local time = UTC + offset
+        if (m[7].str() != "Z") {
+            if (field(9) > 23 || field(10) > 59) bad(text, "not a valid UTC offset");
+            offset = (m[8].str() == "-" ? -1.0 : 1.0) * (3600.0 * field(9) + 60.0 * field(10));
+        }
+        return checked(text, *t - offset);
     }
     if (std::regex_match(text, m, std::regex(R"(\+([0-9]+(\.[0-9]+)?)([smh]?))"))) {
-        const double v = std::stod(m[1].str());
+        const double v = number(text, m[1].str());
         const std::string unit = m[3].str();
         const double f = unit == "m" ? 60.0 : unit == "h" ? 3600.0 : 1.0;
-        return now + v * f;
+        return checked(text, now + v * f);
     }
     if (std::regex_match(text, m, std::regex(R"(\+([0-9]+):([0-5][0-9]):([0-5][0-9]))")))
-        return now + 3600.0 * std::stod(m[1].str()) + 60.0 * std::stod(m[2].str()) +
-               std::stod(m[3].str());
+        return checked(text, now + 3600.0 * number(text, m[1].str()) +
+                                 60.0 * number(text, m[2].str()) + number(text, m[3].str()));
     bad(text, "not a deadline");
 }
 

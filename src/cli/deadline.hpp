@@ -12,9 +12,11 @@ namespace hopper::cli {
 //   "slurm-120", "slurm-2m" the Slurm job's end time minus that much (the batch template: the
 //                           moment Slurm's warning signal is due, plus the grace)
 //   "@1767225600"           seconds since 1970
-//   "2026-11-24T15:00:00Z"  ISO 8601 UTC
+//   "2026-11-24T15:00:00Z"  ISO 8601 UTC, or with a UTC offset: "2026-11-24T16:00:00+01:00";
+//                           a date that does not exist (2026-02-31) is refused
 //   "+3600", "+90m", "+2h", "+1:30:00"   from `now`
-// Throws core::ConfigError naming the value and the allowed forms.
+// Throws core::ConfigError naming the value and the allowed forms; also for a number too large
+// or a deadline after 9999-12-31T23:59:59Z.
 std::optional<double> parse_deadline(const std::string& text, double now);
 
 // The end time of the Slurm job this process runs in: SLURM_JOB_END_TIME when Slurm sets it,

@@ -17,6 +17,9 @@ enum ExitCode : int {
     // simulate: the realization ended with status failed; run: some realizations failed.
     exit_realization_failed = campaign::run_with_failures,
     exit_stopped = campaign::run_stopped,  // run: stopped by a signal; the same command resumes
+    // run: every realization is stored (the journal), but the analysis at its end could not be
+    // written into the store (a full disk); `campaign analyze STORE` writes it (issue 29).
+    exit_analysis_not_written = 5,
 };
 
 struct ExitCodeMeaning {
@@ -31,6 +34,7 @@ inline constexpr ExitCodeMeaning exit_code_meanings[] = {
     {exit_usage, "bad command line or sweep file"},
     {exit_realization_failed, "realization(s) failed"},
     {exit_stopped, "stopped by a signal (run; resumable)"},
+    {exit_analysis_not_written, "realizations stored, analysis not written (run; disk full?)"},
 };
 
 }  // namespace hopper::cli

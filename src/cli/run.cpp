@@ -10,6 +10,7 @@
 
 #include "cli/analyze.hpp"
 #include "cli/deadline.hpp"
+#include "cli/exit_codes.hpp"
 #include "cli/options.hpp"
 #include "cli/python_tools.hpp"
 #include "hopper/campaign/run.hpp"
@@ -102,7 +103,8 @@ void print_run_help(std::ostream& os) {
           "realization's state is saved in STORE.checkpoints/ (also every --checkpoint-interval\n"
           "seconds) and continues from there, bit-identical, in the next run.\n\n"
           "exit codes: 0 all stored, 2 bad sweep file or refused store, 1 store or I/O error,\n"
-          "            3 finished with failed realizations, 4 stopped by a signal (resumable)\n\n"
+          "            3 finished with failed realizations, 4 stopped by a signal (resumable),\n"
+          "            5 every realization stored but the analysis not written (disk full?)\n\n"
        << run_options();
 }
 
@@ -218,13 +220,25 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     opt.after_run = [plots](const std::filesystem::path& store, int code) {
         if (code == campaign::run_stopped) return code;
         std::cout << '\n';
+        // Issue 29, item 5: a run whose analysis could not be written (a full disk) must not
+        // exit 0: a script or a Slurm chain takes 0 as "done, analyzed".
+        const int not_written = code != exit_ok ? code : exit_analysis_not_written;
         try {
-            if (analyze_store(store, false, true, std::cout, std::cerr) != 0) return code;
+            bool written = false;
+            const int a = analyze_store(store, false, true, std::cout, std::cerr, &written);
+            if (!written) {
+                std::cerr << "campaign: every realization is stored (the journal holds them), but "
+                             "the analysis is not in the store: free space and run `campaign "
+                             "analyze "
+                          << store.string() << "`" << std::endl;
+                return not_written;
+            }
+            if (a != 0) return code;
         } catch (const std::exception& e) {
             std::cerr << "campaign: the analysis failed (the realizations are stored; retry with "
                          "`campaign analyze "
                       << store.string() << "`): " << e.what() << std::endl;
-            return code;
+            return not_written;
         }
         fs::path out = store;
         out.replace_extension();

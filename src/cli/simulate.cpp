@@ -65,7 +65,21 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
 
 int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& err) {
     std::optional<StoredTask> stored;
-    if (opt.point) stored = stored_task(*opt.store, *opt.point, opt.realization);
+    // The stored outcome the rerun is compared with, read before anything runs: a realization
+    // not stored yet has nothing to compare with (issue 29, item 8).
+    std::optional<engine::RealizationResult> before;
+    if (opt.point) {
+        stored = stored_task(*opt.store, *opt.point, opt.realization);
+        for (auto& r : store::read_journal_realizations(*opt.store))
+            if (r.label == *opt.point && r.record.realization == opt.realization)
+                before = std::move(r.result);
+        if (!before)
+            throw core::ConfigError("--realization " + std::to_string(opt.realization) +
+                                    ": realization " + std::to_string(opt.realization) + " of '" +
+                                    *opt.point + "' is not stored yet in " + opt.store->string() +
+                                    ", so there is nothing to rerun and compare with (`campaign "
+                                    "status` lists what is done; `campaign run` stores it)");
+    }
     const engine::SceneParams scene =
         stored ? stored->scene
                : config::scene_at(config::load_sweep(opt.sweep), opt.D_cm, opt.theta_deg);
@@ -156,14 +170,7 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
     out << std::flush;
     if (stored) {
         // Bit for bit: the stored realization's outcomes must come out exactly.
-        std::optional<engine::RealizationResult> before;
-        for (auto& r : store::read_journal_realizations(*opt.store))
-            if (r.label == *opt.point && r.record.realization == opt.realization)
-                before = std::move(r.result);
-        if (!before) {
-            err << "campaign: note: realization " << opt.realization << " of '" << *opt.point
-                << "' is not stored yet: nothing to compare with\n";
-        } else {
+        {
             const auto same_events = [](const auto& a, const auto& b) {
                 if (a.size() != b.size()) return false;
                 for (std::size_t i = 0; i < a.size(); ++i)

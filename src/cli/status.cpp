@@ -195,8 +195,9 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
         << (s.writer_active  ? "a `campaign run` is writing the store"
             : s.hdf5_in_step ? "idle; the HDF5 file is complete"
             : s.runs.empty() ? "idle; nothing stored yet"
-                             : "idle; the last run did not close the HDF5 file (killed?): the "
-                               "next `campaign run` rebuilds it from the journal")
+                             : "idle; the HDF5 file is not in step with the journal (a run "
+                               "killed, or a write that failed: disk full?): the next `campaign "
+                               "run` rebuilds it from the journal")
         << '\n';
     out << "progress  " << s.done << "/" << s.total << " done, " << s.failed << " failed";
     if (s.errors) out << " (" << s.errors << " by exceptions, retried by the next run)";

@@ -81,6 +81,11 @@ void Parser::read_campaign(const toml::node& node, SweepFile& out) const {
                                                    : CampaignTarget::Quantity::mean_s;
             target_given = true;
         } else if (key == "target_rel_ci") {
+            if (!v.is_integer() && !v.is_floating_point())
+                fail(v.source(), "campaign.target_rel_ci = " + node_text(v) +
+                                     " has the wrong type: expected a number (the relative "
+                                     "half-width of the 95 % interval, e.g. 0.1), got " +
+                                     type_name(v));
             const auto x = v.value<double>();
             if (!x || !(*x > 0.0 && *x <= 1.0))
                 fail(v.source(), "campaign.target_rel_ci = " + node_text(v) +

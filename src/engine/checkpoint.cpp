@@ -1,5 +1,8 @@
 #include "hopper/engine/checkpoint.hpp"
 
+#include <cmath>
+#include <string>
+
 #include "hopper/core/error.hpp"
 #include "hopper/engine/fields.hpp"
 #include "hopper/engine/result.hpp"
@@ -129,25 +132,115 @@ void CheckpointAccess::restore(System& s, StateReader& r) {
     s.phase_.forces = r.get<double>();
     s.phase_.integration = r.get<double>();
     s.phase_.neighbors = r.get<double>();
-    // Columns of one particle kind must agree in length, and the lists must point inside them.
-    const std::size_t n = s.x_.size(), nw = s.wx_.size();
-    for (const auto* c :
-         {&s.y_, &s.vx_, &s.vy_, &s.w_, &s.fx_, &s.fy_, &s.tq_, &s.r_, &s.m_, &s.inv_m_, &s.inv_I_})
-        if (c->size() != n) StateReader::fail();
-    if (s.id_.size() != n || s.wy_.size() != nw || s.wr_.size() != nw || s.wid_.size() != nw)
-        StateReader::fail();
-    if (!s.pstart_.empty() &&
-        (s.pstart_.size() != n + 1 || std::size_t(s.pstart_.back()) != s.pj_.size()))
-        StateReader::fail();
-    if (!s.wstart_.empty() &&
-        (s.wstart_.size() != n + 1 || std::size_t(s.wstart_.back()) != s.wj_.size()))
-        StateReader::fail();
-    for (int j : s.pj_)
-        if (j < 0 || std::size_t(j) >= n) StateReader::fail();
-    for (int j : s.wj_)
-        if (j < 0 || std::size_t(j) >= nw) StateReader::fail();
+    check_invariants(s);
     // Per-pair constants of the list are derived, not saved: the same bits from the same list.
     if (!s.pstart_.empty() && !s.wstart_.empty()) s.pair_constants();
+}
+
+namespace {
+
+// A state whose checksum is right can still be wrong (a bug or a memory error before the write,
+// a hand edit): what the next time steps index with or divide by is checked before it is used.
+[[noreturn]] void inconsistent(const std::string& what) {
+    throw core::ConfigError("the checkpoint's state is inconsistent (" + what +
+                            "); it cannot be continued");
+}
+
+bool all_finite(const std::vector<double>& v) {
+    for (double x : v)
+        if (!std::isfinite(x)) return false;
+    return true;
+}
+
+bool all_positive(const std::vector<double>& v) {
+    for (double x : v)
+        if (!(x > 0.0) || !std::isfinite(x)) return false;
+    return true;
+}
+
+// A CSR row index: empty, or rows + 1 non-decreasing offsets from 0 to `entries`.
+bool valid_starts(const std::vector<int>& start, std::size_t rows, std::size_t entries) {
+    if (start.empty()) return true;
+    if (start.size() != rows + 1 || start.front() != 0 || std::size_t(start.back()) != entries)
+        return false;
+    for (std::size_t k = 0; k + 1 < start.size(); ++k)
+        if (start[k] > start[k + 1]) return false;
+    return true;
+}
+
+}  // namespace
+
+void CheckpointAccess::check_invariants(const System& s) {
+    const std::size_t n = s.x_.size(), nw = s.wx_.size();
+    // Columns of one particle kind agree in length.
+    for (const auto* c :
+         {&s.y_, &s.vx_, &s.vy_, &s.w_, &s.fx_, &s.fy_, &s.tq_, &s.r_, &s.m_, &s.inv_m_, &s.inv_I_})
+        if (c->size() != n) inconsistent("particle columns of different lengths");
+    if (s.id_.size() != n) inconsistent("particle ids and columns of different lengths");
+    if (s.wy_.size() != nw || s.wr_.size() != nw || s.wid_.size() != nw)
+        inconsistent("wall columns of different lengths");
+    for (const auto* c : {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_, &s.w4_})
+        if ((!c->empty() || (s.ready_ && s.config_.scheme == Scheme::gear4)) && c->size() != n)
+            inconsistent("integrator history of another length than the particle columns");
+    if (s.ready_ && (s.xref_.size() != n || s.yref_.size() != n))
+        inconsistent("reference positions of another length than the particle columns");
+    // Finite values; sizes, masses and inertias positive.
+    for (const auto* c : {&s.x_,     &s.y_,     &s.vx_,    &s.vy_,    &s.w_,      &s.fx_,    &s.fy_,
+                          &s.tq_,    &s.x2_,    &s.x3_,    &s.x4_,    &s.y2_,     &s.y3_,    &s.y4_,
+                          &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,   &s.wx_,    &s.wy_,
+                          &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.hist_x_, &s.hist_y_})
+        if (!all_finite(*c)) inconsistent("a non-finite position, velocity, force or spring");
+    for (const auto* c : {&s.r_, &s.m_, &s.inv_m_, &s.inv_I_, &s.wr_})
+        if (!all_positive(*c)) inconsistent("a radius, mass or inertia that is not positive");
+    for (double v :
+         {s.time_, s.cell_size_, s.grid_x0_, s.grid_y0_, s.wcell_size_, s.wgrid_x0_, s.wgrid_y0_,
+          s.r_max_, s.wr_max_, s.wall_offset_ref_.x(), s.wall_offset_ref_.y(), s.wall_offset_.x(),
+          s.wall_offset_.y(), s.wall_velocity_.x(), s.wall_velocity_.y()})
+        if (!std::isfinite(v)) inconsistent("a non-finite time, grid or wall motion");
+    if (std::isnan(s.removal_floor_)) inconsistent("a removal floor that is not a number");
+    // Ids: below the next id to hand out.
+    if (s.next_id_ < 0) inconsistent("a negative next id");
+    for (const auto* c : {&s.id_, &s.wid_})
+        for (int id : *c)
+            if (id < 0 || id >= s.next_id_) inconsistent("a particle id out of range");
+    for (const Removal& q : s.removals_)
+        if (q.id < 0 || q.id >= s.next_id_ || !std::isfinite(q.time))
+            inconsistent("a removed particle's id out of range");
+    // The neighbour list: row starts in order and inside the list; partners inside the columns
+    // and, for the half list, later in cell order (the batched force pass relies on it).
+    if (!valid_starts(s.pstart_, n, s.pj_.size()) || !valid_starts(s.wstart_, n, s.wj_.size()))
+        inconsistent("a neighbour list row start out of order or out of range");
+    if (s.pstart_.empty() != s.wstart_.empty() || (s.ready_ && s.pstart_.empty()))
+        inconsistent("a neighbour list missing");
+    if (s.pstart_.empty() && !(s.pj_.empty() && s.wj_.empty()))
+        inconsistent("neighbour list entries without row starts");
+    if (!s.pstart_.empty())
+        for (std::size_t i = 0; i < n; ++i)
+            for (int k = s.pstart_[i]; k < s.pstart_[i + 1]; ++k)
+                if (s.pj_[k] <= int(i) || std::size_t(s.pj_[k]) >= n)
+                    inconsistent("a neighbour list partner out of range");
+    for (int j : s.wj_)
+        if (j < 0 || std::size_t(j) >= nw) inconsistent("a wall partner out of range");
+    if (s.history_ && !s.pstart_.empty() &&
+        (s.pxi_x_.size() != s.pj_.size() || s.pxi_y_.size() != s.pj_.size() ||
+         s.wxi_x_.size() != s.wj_.size() || s.wxi_y_.size() != s.wj_.size()))
+        inconsistent("tangential springs of another length than the neighbour list");
+    // The springs saved across a rebuild (read at the next rebuild when history_saved_).
+    if (!valid_starts(s.hist_start_, s.hist_start_.empty() ? 0 : s.hist_start_.size() - 1,
+                      s.hist_partner_.size()) ||
+        s.hist_x_.size() != s.hist_partner_.size() || s.hist_y_.size() != s.hist_partner_.size())
+        inconsistent("saved springs out of order or out of range");
+    // The wall grid, used until the walls change.
+    if (!s.walls_changed_ && nw > 0) {
+        const std::int64_t cells = std::int64_t(s.wgrid_nx_) * std::int64_t(s.wgrid_ny_);
+        if (s.wgrid_nx_ < 1 || s.wgrid_ny_ < 1 || !(s.wcell_size_ > 0.0) ||
+            cells > (std::int64_t(1) << 31) - 2 ||
+            !valid_starts(s.wcell_start_, std::size_t(cells), s.wcell_items_.size()) ||
+            s.wcell_start_.empty() || s.wcell_items_.size() != nw)
+            inconsistent("a wall grid of impossible size");
+        for (int j : s.wcell_items_)
+            if (j < 0 || std::size_t(j) >= nw) inconsistent("a wall grid item out of range");
+    }
 }
 
 void save_moments(const FieldMoments& m, StateWriter& w) {
@@ -194,6 +287,15 @@ void restore_moments(FieldMoments& m, StateReader& r) {
     r.get_vector(m.outline_x);
     r.get_vector(m.outline_y);
     m.wall_diameter = r.get<double>();
+    // Per-node vectors sized by the grid (merge and the store index them by node).
+    if (m.grid.nx < 0 || m.grid.ny < 0 ||
+        std::int64_t(m.grid.nx) * std::int64_t(m.grid.ny) > (std::int64_t(1) << 31) - 1)
+        StateReader::fail();
+    const auto nodes = std::size_t(m.grid.size());
+    bool sized = m.windows.size() == nodes && m.weight.size() == nodes;
+    for (int f = 0; f < field_count; ++f)
+        sized = sized && m.mean[f].size() == nodes && m.m2[f].size() == nodes;
+    if (!sized) StateReader::fail();
 }
 
 void CheckpointAccess::save(const FieldAccumulator& a, StateWriter& w) {

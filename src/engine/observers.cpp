@@ -263,8 +263,12 @@ void Reinserter::reinsert(int id, const SceneParams& p, System& s, IdTable& ids,
         }
         return false;
     };
-    for (int attempt = 0; attempt < 2000; ++attempt) {
-        // The band widens by a large diameter for every 200 failed draws.
+    // The band widens by a large diameter for every 200 failed draws. A wide outlet lets
+    // particles out faster than the first 2000 draws' band (12 large diameters) clears by
+    // falling: the band then goes on widening, up to about 100 diameters above the packing
+    // (issue 29, item 6; the draws of a realization that found room in 2000 are unchanged).
+    constexpr int max_attempts = 20000;
+    for (int attempt = 0; attempt < max_attempts; ++attempt) {
         const double band = 2.5 + attempt / 200;
         const double lift = rng.uniform(0.5, 0.5 + band) * p.particles.d_large;
         const Vec2 q(rng.uniform(-half_w, half_w), top + rad + lift);
@@ -274,9 +278,13 @@ void Reinserter::reinsert(int id, const SceneParams& p, System& s, IdTable& ids,
         ids.remember(nid, m, d, I);
         return;
     }
-    throw core::SimulationError(
-        "steady state: no free place found above the packing to re-insert a particle in "
-        "2000 draws; widen the hopper or lower hopper.particles");
+    std::ostringstream msg;
+    msg << "steady state: no free place found to re-insert a particle within "
+        << 2.5 + max_attempts / 200 << " large diameters above the packing in " << max_attempts
+        << " draws: particles leave faster than they can be re-inserted (outlet D = "
+        << p.hopper.outlet * 100 << " cm, hopper " << p.hopper.width * 100
+        << " cm wide); use a smaller outlet, a wider hopper or fewer particles";
+    throw core::SimulationError(msg.str());
 }
 
 }  // namespace hopper::engine::detail

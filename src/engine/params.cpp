@@ -188,6 +188,27 @@ void validate_scene(const SceneParams& p) {
     require_range("protocol.fill_gap", pr.fill_gap, 0.0, 10.0);
     require_range("protocol.fill_speed", pr.fill_speed, 0.0, 10.0, false, " m/s");
     require_range("protocol.fill_base", pr.fill_base, 0.0, 1000.0, false, " d_large");
+    {
+        // The fill's column (scene.cpp: a square lattice of pitch d_large + gap, rows as wide
+        // as the side walls allow at most) must be a hopper's, not a chimney many hundred widths
+        // tall: 10 million disks in a 10 cm hopper would stack 5 km high and fill gigabytes
+        // before the first step (issue 29, item 7). A lower bound on its height: every row full.
+        const double gap = pr.fill_gap * s.d_large;
+        const double pitch = s.d_large + gap;
+        const double clear = std::max(h.wall_diameter, d_edge) / 2 + s.d_large / 2 + gap;
+        const double row_width = h.width + h.wall_diameter - 2.0 * clear;
+        const double per_row = row_width < 0.0 ? 1.0 : std::floor(row_width / pitch + 1e-9) + 1.0;
+        const double column = std::ceil(s.count / per_row) * pitch;
+        constexpr double max_aspect = 1000.0;
+        if (column > max_aspect * h.width) {
+            std::ostringstream msg;
+            msg << "particles.count (hopper.particles) = " << s.count << " does not fit a hopper "
+                << h.width << " m wide: its particles would stand in a column at least " << column
+                << " m tall (" << std::llround(column / h.width) << " widths; at most "
+                << max_aspect << " allowed); lower the particle count or widen the hopper";
+            throw ConfigError(msg.str());
+        }
+    }
     require_range("protocol.settle_ke", pr.settle_ke, 0.0, 1.0, true);
     require_range("protocol.settle_hold", pr.settle_hold, 0.0, 100.0, true, " s");
     require_range("protocol.settle_max_time", pr.settle_max_time, 0.0, 1e5, true, " s");

@@ -225,6 +225,7 @@ struct Realization::Impl {
     void check_fingerprint(StateReader& r) const;
     std::vector<std::uint8_t> save_state() const;
     void restore_state(std::span<const std::uint8_t> bytes);
+    void remember_reinserted();  // realization_state.cpp
 
     // ----- settle (step 2) --------------------------------------------------------------
     void settle() {

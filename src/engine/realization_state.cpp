@@ -38,6 +38,39 @@ void Realization::Impl::check_fingerprint(StateReader& r) const {
         throw core::ConfigError("the checkpoint belongs to another realization:" + why.str());
 }
 
+// The id table is built with the fill and not saved: particles re-inserted by the steady state
+// before the checkpoint have ids beyond it. Each is a copy of a fill particle (same mass and
+// diameter, reinsert in observers.cpp), so its inertia is that fill particle's.
+void Realization::Impl::remember_reinserted() {
+    struct Kind {
+        double m, d, inertia;
+    };
+    std::vector<Kind> kinds;
+    for (std::size_t id = 0; id < ids.mass.size(); ++id) {
+        if (!(ids.mass[id] > 0.0)) continue;
+        const Kind k{ids.mass[id], ids.diameter[id], ids.inertia[id]};
+        if (std::none_of(kinds.begin(), kinds.end(), [&](const Kind& o) {
+                return o.m == k.m && o.d == k.d && o.inertia == k.inertia;
+            }))
+            kinds.push_back(k);
+    }
+    const auto idv = sys->ids();
+    const auto m = sys->m();
+    const auto rad = sys->r();
+    for (std::size_t i = 0; i < idv.size(); ++i) {
+        const auto id = std::size_t(idv[i]);
+        if (id < ids.mass.size() && ids.mass[id] > 0.0) continue;
+        const double d = 2.0 * rad[i];
+        const auto k = std::find_if(kinds.begin(), kinds.end(),
+                                    [&](const Kind& o) { return o.m == m[i] && o.d == d; });
+        if (k == kinds.end())
+            throw core::ConfigError(
+                "the checkpoint's state is inconsistent (a particle of a mass and diameter no "
+                "particle of the fill has); it cannot be continued");
+        ids.remember(int(id), k->m, k->d, k->inertia);
+    }
+}
+
 std::vector<std::uint8_t> Realization::Impl::save_state() const {
     StateWriter w;
     w.put_string("HOPPERRS");
@@ -127,6 +160,7 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
     rng.set_state(rs);
     restore_result(res, r);
     CheckpointAccess::restore(*sys, r);
+    remember_reinserted();
     fields.acc.reset();
     if (r.get<std::uint8_t>()) {
         if (!p.fields.enabled) StateReader::fail();

@@ -383,6 +383,14 @@ StoreStatus read_status(const fs::path& store) {
     s.store = store;
     s.writer_active = journal_locked(jpath);
     s.hdf5_in_step = !s.writer_active && state.closed_in_step() && fs::exists(store, ec);
+    // The journal says the file was closed in step; the file must still be the one closed (its
+    // size and CRC-32C in the last sync record; read as plain bytes, without HDF5 and its file
+    // lock, which a run starting meanwhile needs): a write of /analysis that failed on a full
+    // disk leaves another file (issue 29, item 5). Stores synced before checksums: as recorded.
+    if (s.hdf5_in_step) {
+        const FileCheck check = check_closed_file(state, store);
+        s.hdf5_in_step = check == FileCheck::intact || check == FileCheck::unrecorded;
+    }
     s.journal_bytes = scan.valid_bytes;
     s.torn_bytes = scan.torn_bytes();
     s.plan = std::move(state.plan);

@@ -83,25 +83,13 @@ cp "$STORE.checkpoints"/*.ckpt "$WORK/" # kept for case 4
 # 2. One file as if from another code version (checksum recomputed): refused, restarted.
 victim=$(ls "$STORE.checkpoints"/*.ckpt | head -1)
 "$PY" - "$victim" <<'PY' || fail "rewriting the checkpoint"
-import struct, sys
-def crc32c(data):
-    table = []
-    for i in range(256):
-        c = i
-        for _ in range(8):
-            c = (c >> 1) ^ 0x82F63B78 if c & 1 else c >> 1
-        table.append(c)
-    c = 0xFFFFFFFF
-    for b in data:
-        c = table[(c ^ b) & 0xFF] ^ (c >> 8)
-    return c ^ 0xFFFFFFFF
-b = open(sys.argv[1], "rb").read()
-body = b[:-4]
-assert struct.unpack("<I", b[-4:])[0] == crc32c(body), "checksum layout"
+import os, struct, sys
+sys.path.insert(0, os.path.join(os.environ["SRC"], "tests", "campaign"))
+from ckpt_file import read_body, write_body
+body = read_body(sys.argv[1])
 n = struct.unpack("<I", body[12:16])[0]  # the code version's length prefix
 new = b"v0.0-other"
-body = body[:12] + struct.pack("<I", len(new)) + new + body[16 + n:]
-open(sys.argv[1], "wb").write(body + struct.pack("<I", crc32c(body)))
+write_body(sys.argv[1], body[:12] + struct.pack("<I", len(new)) + new + body[16 + n:])
 PY
 run_expect 0 rerun $(run_cmd "$STORE")
 expect_in rerun.err "written by code version v0.0-other"

@@ -601,5 +601,108 @@ TEST(MasterDeadline, ShortTasksRunAndARunningOneIsStoppedAtTheDeadline) {
     EXPECT_EQ(h.entry(0)->state, store::TaskState::pending);
 }
 
+// Issue 29, item 1: a realization that fails after continuing from its checkpoint (the state
+// had a valid checksum but was wrong) is not stored as failed, and one whose state the engine
+// refuses is not an error: either way the file goes and the realization starts over from its
+// beginning, whose outcome is stored.
+TEST(MasterCheckpoint, AFailureAfterContinuingFromACheckpointRestartsFromTheBeginning) {
+    const fs::path dir = scratch();
+    store::Store st(dir / "s.h5");
+    store::PointPlan a;
+    a.label = "D_cm=2 theta_deg=60";
+    a.scene = "a\n";
+    a.seeds = {1000, 1001};
+    store::RunStartRecord run;
+    run.plan.name = "t";
+    run.plan.seed = 1;
+    run.plan.points = {a};
+    st.begin_run(run);
+    std::vector<TaskRef> todo;
+    for (int i = 0; i < 2; ++i)
+        todo.push_back(TaskRef{i, a.label, i, a.seeds[std::size_t(i)], 0.0, a.physics_hash()});
+    CheckpointFiles files(dir / "s.h5", "test");
+    const std::vector<std::uint8_t> state{1, 2, 3};
+    files.write(CheckpointKey{a.label, 0, 1000, a.physics_hash()}, 5.0, state);
+    files.write(CheckpointKey{a.label, 1, 1001, a.physics_hash()}, 5.0, state);
+    ASSERT_EQ(files.count(), 2);
+
+    InProcessChannels channels(1);
+    std::mutex mutex;
+    std::vector<std::size_t> state_sizes;  // per call to task 0
+    std::thread worker([&] {
+        WorkerOptions wopt;
+        wopt.checkpoints = true;
+        run_worker(
+            channels.worker(0),
+            [&](int task, std::span<const std::uint8_t> s, const engine::RunHooks&) {
+                if (task == 0) {
+                    std::lock_guard lock(mutex);
+                    state_sizes.push_back(s.size());
+                }
+                // Task 1's state is refused by the engine (the runner of run.cpp says so).
+                if (task == 1 && !s.empty())
+                    throw std::runtime_error(std::string(checkpoint_refused) +
+                                             "the checkpoint's state is inconsistent (test)");
+                // Task 0's continues and fails; from the beginning both complete.
+                return fake_result(todo.at(std::size_t(task)).seed,
+                                   s.empty() ? engine::Status::complete : engine::Status::failed);
+            },
+            wopt);
+    });
+    MasterOptions opt = Harness::fast_options();
+    opt.checkpoints = &files;
+    ManualStop stop;
+    std::ostringstream log;
+    MasterReport rep;
+    {
+        Master m(channels.master(), st, stop, opt, log);
+        rep = m.run(todo, Totals{2, 0, 0});
+    }
+    channels.master().send(1, Message::make(MessageKind::quit));
+    worker.join();
+    EXPECT_EQ(rep.stored, 2);
+    EXPECT_EQ(rep.failed, 0);
+    EXPECT_EQ(rep.errors, 0);
+    EXPECT_EQ(st.task(a.label, 1)->state, store::TaskState::done);
+    EXPECT_EQ(st.task(a.label, 1)->errors, 0);
+    EXPECT_NE(log.str().find("the checkpoint's state is inconsistent (test): the checkpoint of"),
+              std::string::npos)
+        << log.str();
+    ASSERT_EQ(state_sizes.size(), 2u);
+    EXPECT_EQ(state_sizes[0], state.size());
+    EXPECT_EQ(state_sizes[1], 0u);
+    EXPECT_EQ(files.count(), 0);
+    EXPECT_EQ(st.task(a.label, 0)->state, store::TaskState::done);
+    EXPECT_NE(log.str().find("failed after continuing from its checkpoint"), std::string::npos)
+        << log.str();
+}
+
+// Issue 29, item 3: a deadline far ahead (9999-12-31T23:59:59Z, the latest --deadline takes)
+// overflowed the master's clock: it polled without sleeping, and a drain stopped the running
+// realizations at once instead of letting them finish.
+TEST(MasterDeadline, AFarDeadlineNeitherSpinsNorCutsADrainShort) {
+    MasterOptions opt = Harness::fast_options();
+    opt.max_wait = 250ms;
+    opt.grace = 30;
+    opt.deadline = 253402300799.0;
+    Harness* self = nullptr;
+    Harness h(
+        2, 1,
+        [&self](const TaskRef& t, int, const engine::RunHooks& hooks) {
+            self->stop.request(StopLevel::drain, "SIGUSR1");
+            if (!cooperative_sleep(800ms, hooks))
+                return fake_result(t.seed, engine::Status::failed);
+            return ok(t);
+        },
+        opt);
+    self = &h;
+    const MasterReport r = h.run();
+    EXPECT_EQ(r.stored, 1) << h.log.str();  // the running one finished within the grace
+    EXPECT_EQ(r.interrupted, 0);
+    EXPECT_EQ(r.not_started, 1);
+    EXPECT_GT(r.wall_seconds, 0.75);
+    EXPECT_LT(r.cpu_seconds / r.wall_seconds, 0.1) << r.cpu_seconds << " s of CPU";
+}
+
 }  // namespace
 }  // namespace hopper::campaign

@@ -7,6 +7,8 @@
 
 #include <atomic>
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -191,6 +193,75 @@ TEST(CheckpointRefusal, AnotherRealizationFormatOrDamageIsRefusedWithTheReason) 
     EXPECT_NE(message_of(p, 1, truncated).find("truncated or damaged"), std::string::npos);
     const std::vector<std::uint8_t> garbage(100, 0x41);
     EXPECT_NE(message_of(p, 1, garbage).find("not a hopper realization state"), std::string::npos);
+}
+
+// Issue 29, item 1: a state whose checksum would be right but whose content is not (a bug or a
+// memory error before the write, a hand edit) is refused with the reason, never run: a row
+// start of the neighbour list set to -1000000 crashed every resume before.
+TEST(CheckpointRefusal, AStateThatBreaksItsInvariantsIsRefused) {
+    const SceneParams p = jamming(Scheme::gear4, false);
+    Phase phase{};
+    const auto state = run_until(p, 1, nullptr, 500, &phase);
+    ASSERT_FALSE(state.empty());
+    // The neighbour list's row starts: a vector of n + 1 ints from 0, non-decreasing, followed
+    // by the partner list whose length is their last value.
+    const std::uint64_t n = 300;
+    auto u64_at = [&](std::size_t o) {
+        std::uint64_t v;
+        std::memcpy(&v, state.data() + o, 8);
+        return v;
+    };
+    auto i32_at = [&](std::size_t o) {
+        std::int32_t v;
+        std::memcpy(&v, state.data() + o, 4);
+        return v;
+    };
+    std::size_t pstart = 0;
+    for (std::size_t o = 0; o + 8 + 4 * (n + 1) + 8 <= state.size() && !pstart; ++o) {
+        if (u64_at(o) != n + 1 || i32_at(o + 8) != 0) continue;
+        bool monotone = true;
+        for (std::size_t k = 1; k <= n && monotone; ++k)
+            monotone = i32_at(o + 8 + 4 * k) >= i32_at(o + 8 + 4 * (k - 1));
+        const auto last = i32_at(o + 8 + 4 * n);
+        if (monotone && last > 0 && u64_at(o + 8 + 4 * (n + 1)) == std::uint64_t(last))
+            pstart = o + 8;
+    }
+    ASSERT_NE(pstart, 0u) << "row starts of the neighbour list not found in the state";
+    auto message_of = [&](const std::vector<std::uint8_t>& b) -> std::string {
+        try {
+            resume_realization(p, 1, b);
+        } catch (const core::ConfigError& e) {
+            return e.what();
+        }
+        return "accepted";
+    };
+    auto with_i32 = [&](std::size_t o, std::int32_t v) {
+        auto b = state;
+        std::memcpy(b.data() + o, &v, 4);
+        return b;
+    };
+    EXPECT_NE(message_of(with_i32(pstart + 4 * 5, -1000000)).find("row start"), std::string::npos);
+    EXPECT_NE(message_of(with_i32(pstart + 4 * 5, 1 << 30)).find("row start"), std::string::npos);
+    // The first partner of the list (after the row starts and its count): the owner itself.
+    const std::size_t pj = pstart + 4 * (n + 1) + 8;
+    const auto first_owner_with_partner = [&] {
+        for (std::size_t i = 0; i < n; ++i)
+            if (i32_at(pstart + 4 * (i + 1)) > 0) return std::int32_t(i);
+        return std::int32_t(-1);
+    }();
+    ASSERT_GE(first_owner_with_partner, 0);
+    EXPECT_NE(message_of(with_i32(pj, first_owner_with_partner)).find("partner out of range"),
+              std::string::npos);
+    EXPECT_NE(message_of(with_i32(pj, 1 << 20)).find("partner out of range"), std::string::npos);
+    // A NaN in the positions: the first three vectors of n doubles in a row (x, y, vx).
+    std::size_t x = 0;
+    for (std::size_t o = 0; o + 24 + 24 * n <= pstart && !x; ++o)
+        if (u64_at(o) == n && u64_at(o + 8 + 8 * n) == n && u64_at(o + 16 + 16 * n) == n) x = o + 8;
+    ASSERT_NE(x, 0u) << "positions not found in the state";
+    auto b = state;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::memcpy(b.data() + x + 8 * 3, &nan, 8);
+    EXPECT_NE(message_of(b).find("non-finite"), std::string::npos);
 }
 
 }  // namespace

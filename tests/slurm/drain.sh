@@ -9,11 +9,7 @@ JOB_NAME=hopper-test-drain
 cluster_up
 STORE=$WORK/drain.h5
 LOG=$STORE.slurm.log
-"$EXE" submit "$TINY" --store "$STORE" --time 10 --signal-lead 60 --grace 20 --max-resubmits 1 \
-    --job-name "$JOB_NAME" >submit.out || fail "campaign submit failed"
-cat submit.out
-job1=$(sed -n 's/^submitted job \([0-9]*\) .*/\1/p' submit.out)
-[ -n "$job1" ] || fail "no job id in: $(cat submit.out)"
+job1=$(submit_tiny submit.out --time 10 --signal-lead 60 --grace 20 --max-resubmits 1) || exit 1
 wait_stored "$STORE" 5
 scancel -b -s USR1 "$job1" || fail "scancel -b -s USR1 $job1"
 for _ in $(seq 1 300); do
@@ -38,9 +34,7 @@ grep -q "allocation 2: not resubmitting: the cap of 1 resubmission(s) is reached
     fail "allocation 2 did not stop at the cap"
 
 # `campaign submit` again resumes; a plain scancel (SIGTERM, time left) stops without resubmitting.
-"$EXE" submit "$TINY" --store "$STORE" --time 10 --signal-lead 60 --grace 20 --max-resubmits 5 \
-    --job-name "$JOB_NAME" >submit3.out || fail "campaign submit (again) failed"
-job3=$(sed -n 's/^submitted job \([0-9]*\) .*/\1/p' submit3.out)
+job3=$(submit_tiny submit3.out --time 10 --signal-lead 60 --grace 20 --max-resubmits 5) || exit 1
 before=$("$EXE" status "$STORE" --json | sed -n 's/^  "done": \([0-9]*\).*/\1/p')
 wait_stored "$STORE" $((before + 5))
 scancel "$job3" || fail "scancel $job3"

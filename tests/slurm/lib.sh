@@ -66,6 +66,19 @@ wait_stored() {
     fail "the store never held $2 realizations"
 }
 
+# submit_tiny OUT ARGS...: `campaign submit` of tiny.toml into $STORE as $JOB_NAME with ARGS, its
+# output in OUT; prints the job id.
+submit_tiny() {
+    local out=$1 id
+    shift
+    "$EXE" submit "$TINY" --store "$STORE" --job-name "$JOB_NAME" "$@" >"$out" ||
+        fail "campaign submit failed"
+    cat "$out" >&2
+    id=$(sed -n 's/^submitted job \([0-9]*\) .*/\1/p' "$out")
+    [ -n "$id" ] || fail "no job id in: $(cat "$out")"
+    echo "$id"
+}
+
 # job_of LOG ALLOCATION: the job id of an allocation, from the log's start line.
 job_of() {
     sed -n "s/^hopper-slurm: [^ ]* job \([0-9]*\) allocation $2: start on.*/\1/p" "$1" | head -n 1

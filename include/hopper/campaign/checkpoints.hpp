@@ -20,10 +20,16 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 
 #include "hopper/store/codec.hpp"
 
 namespace hopper::campaign {
+
+// How a worker's error reply starts when the engine refused a checkpoint's state (the runner of
+// run.cpp); the master then removes the file and restarts the realization, without counting an
+// error against it.
+inline constexpr std::string_view checkpoint_refused = "checkpoint refused: ";
 
 struct CheckpointKey {
     std::string label;

@@ -117,6 +117,9 @@ struct CheckpointAccess {
     // `s` must have been built with the same SystemConfig (the realization rebuilds it from its
     // parameters); its whole state is replaced.
     static void restore(System& s, StateReader& r);
+    // Throws core::ConfigError naming the first invariant a restored state breaks (sizes,
+    // indices in range, finite values): a state with a valid checksum may still be wrong.
+    static void check_invariants(const System& s);
     static void save(const FieldAccumulator& a, StateWriter& w);
     static void restore(FieldAccumulator& a, StateReader& r);
 };
