@@ -13,30 +13,21 @@ outlet without jams, one with a single jam, avalanche sizes and arches of 5, 6, 
 - `nothing_to_draw` not refusing a store whose realizations all failed.
 usage: test_figure_files.py SOURCE_DIR"""
 import io
-import pathlib
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
 
-src = pathlib.Path(sys.argv[1])
-sys.path.insert(0, str(src / "analysis"))
-sys.path.insert(0, str(src / "tests" / "analysis"))
+import figure_env
 
-try:
-    import matplotlib
-    import numpy as np
-    import pandas as pd
-    import xarray  # noqa: F401
-except ImportError as e:
-    print("SKIP: %s (install python3-matplotlib, -pandas, -xarray: ./install-deps.sh)" % e)
-    sys.exit(77)
-
-matplotlib.use("Agg")
+src = figure_env.setup()
+import matplotlib  # noqa: E402
 import matplotlib.colors as mcolors  # noqa: E402
 import matplotlib.lines as mlines  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 
 import plots  # noqa: E402
 import synthetic  # noqa: E402
