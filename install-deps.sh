@@ -6,9 +6,10 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config git
   libeigen3-dev libboost-program-options-dev libtomlplusplus-dev nlohmann-json3-dev
-  libhdf5-dev hdf5-tools libopenmpi-dev openmpi-bin
+  libhdf5-dev hdf5-tools libopenmpi-dev openmpi-bin zlib1g-dev
   libgtest-dev googletest
   python3 python3-numpy python3-scipy python3-matplotlib python3-h5py python3-pandas python3-xarray
+  python3-venv python3-setuptools python3-wheel  # pip install ./analysis (tests/install)
   slurm-wlm munge  # the local single-node Slurm of the `slurm` tests (slurm/slurm-up.sh)
 )
 

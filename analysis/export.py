@@ -22,8 +22,11 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from hopper_store import open_store  # noqa: E402
+if __package__:  # imported from the installed package (pip install ./analysis)
+    from .hopper_store import open_store
+else:  # run as a script: campaign runs analysis/export.py by its path
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from hopper_store import open_store  # noqa: E402
 
 TABLES = ["points", "realizations", "survival", "events", "curves", "jams", "exits"]
 ANALYSIS_TABLES = ["analysis", "beverloo", "jam_rate", "km"]

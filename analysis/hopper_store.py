@@ -1,10 +1,10 @@
 """Read a hopper campaign store (STORE.h5) into pandas DataFrames and xarray Datasets.
 
     import sys; sys.path.insert(0, "analysis")      # or PYTHONPATH=analysis
-    from hopper_store import open_store
+    from hopper_store import open_store             # installed: from hopper_analysis import ...
     with open_store("build/quickstart.h5") as s:
         s.points          # one row per point: label, D_cm, theta_deg, every scene setting typed
-        s.realizations    # one row per stored realization (status, jams, empty time, rates, ...)
+        s.realizations    # one row per stored realization (seed and seed_str, status, jams, ...)
         s.survival        # one row per survival interval: duration (s), event (1 jam, 0 censored)
         s.events, s.curves, s.jams, s.exits      # the ragged per-realization arrays, long form
         s.analysis        # /analysis/points (after `campaign analyze`; NaN where not computable)
@@ -16,7 +16,10 @@ A point's settings come from its canonical scene text (/points/scene: every scen
 SI units, one `name=value` a line), not from its label, so every column has its type (numbers
 float64, integers int64, choices str) and a setting that differs between points is found even
 when the labels do not show it (a store extended with --allow-mixed). Numbers in SI as stored,
-plus the label's units for the outlet and the angle (D_cm, theta_deg).
+plus the label's units for the outlet and the angle (D_cm, theta_deg), as the sweep file wrote
+them (60, not 59.99999999999999). Seeds are uint64; `seed_str` repeats each as text ('s' and its
+digits), which R's read.csv and spreadsheets keep exact where they would round a number above
+2^53.
 
 Reading needs Debian's python3-h5py, -numpy and -pandas; fields() also python3-xarray. The store
 must not be written at the time (after `campaign run` has ended; `campaign status` works during).
@@ -64,6 +67,23 @@ def _typed(text):
         return float(text)
     except ValueError:
         return text
+
+
+def as_written(si, unit):
+    """A value in the sweep file's unit as the file wrote it: the shortest decimal x with
+    x * unit == si (the sweep file's value, converted to SI once by the config layer, comes back
+    as 60, not as the quotient 59.99999999999999), else the plain quotient."""
+    si = float(si)
+    for digits in range(1, 18):
+        x = float("%.*g" % (digits, si / unit))
+        if x * unit == si:
+            return x
+    return si / unit
+
+
+# Sweep-file units of the label's settings (the same factors as hopper::core, units.hpp).
+CM = 1e-2
+DEG = math.pi / 180.0
 
 
 def parse_scene(text):
@@ -193,10 +213,16 @@ class Store:
         names = []
         for sc in scenes:
             names += [k for k in sc if k not in names]
+        # D and theta as the sweep file wrote them, from the scene's SI values (stores written
+        # before the plan kept the written value hold the quotient in /points)
+        D = [as_written(sc["hopper.outlet_m"], CM) if "hopper.outlet_m" in sc else float(v)
+             for sc, v in zip(scenes, p["D_cm"][:])]
+        theta = [as_written(sc["hopper.theta_rad"], DEG) if "hopper.theta_rad" in sc
+                 else float(v) for sc, v in zip(scenes, p["theta_deg"][:])]
         df = pd.DataFrame({
             "label": labels,
-            "D_cm": p["D_cm"][:].astype(float),
-            "theta_deg": p["theta_deg"][:].astype(float),
+            "D_cm": np.array(D, dtype=float),
+            "theta_deg": np.array(theta, dtype=float),
             "particles": p["particles"][:].astype(np.int64),
             "realizations_planned": p["realizations"][:].astype(np.int64),
             "physics_hash": p["physics_hash"].asstr()[:] if h5py.check_string_dtype(
@@ -252,6 +278,12 @@ class Store:
             else:
                 cols[k] = d[:]
         df = pd.DataFrame(cols)
+        if "seed" in df:
+            # R's read.csv and spreadsheets read integers above 2^53 as doubles (a seed above
+            # 2^63 no longer reproduces its realization): the seed as text as well, with a
+            # letter so that no reader takes it for a number
+            df.insert(list(df.columns).index("seed") + 1, "seed_str",
+                      np.array(["s%d" % v for v in df["seed"].to_numpy()], dtype=object))
         for name in ("empty_time", "discharge_rate"):
             if "has_" + name in df:
                 df[name] = df[name].where(df["has_" + name].astype(bool))
@@ -262,7 +294,8 @@ class Store:
         df.insert(1, "label", p["label"].to_numpy()[df["point"].to_numpy()] if n else [])
         df.insert(2, "D_cm", p["D_cm"].to_numpy()[df["point"].to_numpy()] if n else [])
         df.insert(3, "theta_deg", p["theta_deg"].to_numpy()[df["point"].to_numpy()] if n else [])
-        first = ["point", "label", "D_cm", "theta_deg", "realization", "seed", "status", "message"]
+        first = ["point", "label", "D_cm", "theta_deg", "realization", "seed", "seed_str",
+                 "status", "message"]
         df = df[[c for c in first if c in df] + [c for c in df if c not in first]]
         df.index.name = "row"
         return df

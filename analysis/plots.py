@@ -11,20 +11,28 @@ angle, a material setting, ...; read from each point's scene text, so settings t
 without being in the labels count too); legends and titles name only those settings. Writes
 into DIR, in every format asked for (default png):
   survival     per group, the Kaplan-Meier survival function of every outlet overlaid (log
-               scale) with its exponential fit exp(-t/tau), tau the censored MLE
+               scale), its jam count in the panel's key, and its exponential fit exp(-t/tau)
+               (tau the censored MLE) from MIN_JAMS_FOR_FIT jams on; outlets without a curve
+               (no jam) or a fit are named in the key with the reason
   jam_rate     tau (with its 95 % interval) and the jam rate 1/tau versus D per group, with the
-               exponential and power-law fits of the rate where the analysis has them
+               exponential and power-law fits of the rate where the analysis has them; an
+               outlet without jams as its 95 % lower bound of tau (an open marker and an arrow)
   beverloo     mass flow rate versus D with the Beverloo fit per group, and the empty time
                versus D
   k_theta      the Beverloo k versus the wall angle (one series per other varied setting)
   in_hopper    particles in the hopper versus discharge time per group, coloured by D
   jam_onsets   every jam's onset versus elapsed discharge time per group and outlet
+  avalanche    (stores with avalanche sizes) <s> versus D, and the size distribution per
+               outlet (coloured by D, in the key)
+  arch_sizes   (stores with arches) the fraction of arches of each size, bars per outlet
   fields_<label>  per point with fields: mean and fluctuation maps of vx, vy, speed, pressure
   fields_compare  with --compare A B: one field of two points side by side on shared scales
 and prints the files it wrote. Sizes: --width page (7 in, two journal columns; default) or
-column (3.4 in); text 7-8 pt at that size. Needs Debian's python3-h5py, -numpy, -pandas,
--matplotlib (and -xarray for fields). Exit codes: 0 figures written, 2 bad arguments or a store
-without /analysis, 1 other errors.
+column (3.4 in); text 7-8 pt at that size. PDF and PostScript embed TrueType (Type 42) fonts;
+a figure is byte-identical from run to run (no dates in its metadata). Needs Debian's
+python3-h5py, -numpy, -pandas, -matplotlib (and -xarray for fields). Exit codes: 0 figures
+written, 2 bad arguments or a store without /analysis, 3 no realization to draw (none stored, or
+every one failed), 1 other errors.
 """
 import argparse
 import math
@@ -38,8 +46,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from hopper_store import open_store, setting_text  # noqa: E402
+if __package__:  # imported from the installed package (pip install ./analysis)
+    from .hopper_store import open_store, setting_text
+else:  # run as a script: campaign runs analysis/plots.py by its path
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from hopper_store import open_store, setting_text  # noqa: E402
 
 G = 9.80665  # m/s^2, as hopper::core::standard_gravity
 WIDTHS = {"page": 7.0, "column": 3.4}  # inches: two journal columns, one
@@ -47,7 +58,17 @@ FORMATS = ("png", "pdf", "svg")
 STYLE = {"font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "xtick.labelsize": 7,
          "ytick.labelsize": 7, "legend.fontsize": 7, "figure.titlesize": 9,
          "legend.frameon": False, "axes.spines.top": False, "axes.spines.right": False,
-         "savefig.dpi": 200, "lines.linewidth": 1.2, "lines.markersize": 4}
+         "savefig.dpi": 200, "lines.linewidth": 1.2, "lines.markersize": 4,
+         # Journals take TrueType (Type 42) fonts in PDF and PostScript, not matplotlib's
+         # default Type 3; SVG's ids from a fixed salt, so that a figure is byte-identical
+         # from run to run (with the dates left out: save()).
+         "pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hopper"}
+# Metadata that would change from run to run: none (no creation date in PDF, no date in SVG).
+METADATA = {"pdf": {"CreationDate": None, "Producer": None},
+            "svg": {"Date": None}, "png": {"Software": None}}
+# A survival curve's exponential fit is drawn from this many jams on (below it tau is a guess:
+# the panel says which outlets have no fit and why).
+MIN_JAMS_FOR_FIT = 3
 
 
 def fail(msg, code=2):
@@ -146,7 +167,7 @@ def save(fig, out, name, formats):
     paths = []
     for fmt in formats:
         path = os.path.join(out, "%s.%s" % (name, fmt))
-        fig.savefig(path)
+        fig.savefig(path, metadata=METADATA.get(fmt))
         paths.append(path)
     plt.close(fig)
     return paths
@@ -154,32 +175,47 @@ def save(fig, out, name, formats):
 
 # ----- survival --------------------------------------------------------------------------------
 
+def jam_text(n):
+    return "%d jam%s" % (n, "" if n == 1 else "s")
+
+
 def plot_survival(st, width):
-    fig, axes = layout(st, len(st.groups), width, panel_h=2.1,
-                       legend_rows=legend_rows([D_text(d) for d in st.Ds] + ["exp(-t/tau)"], width))
+    """Per group, the Kaplan-Meier curve of every outlet with its jam count (in the panel's own
+    key); the exponential fit only from MIN_JAMS_FOR_FIT jams on, and the outlets without a curve
+    or a fit named with the reason."""
+    fig, axes = layout(st, len(st.groups), width, panel_h=2.1, legend_rows=1)
     km = st.s.km
     surv = st.s.survival
-    used = set()
     for ax, (g, rows) in zip(axes, st.groups.items()):
         lowest = 1.0
+        handles, labels = [], []
         for i in rows:
             d = float(st.points.at[i, "D_cm"])
             c = st.D_colour[d]
             k = km[km["point"] == i]
-            longest = float(surv.loc[surv["point"] == i, "duration"].max()) \
-                if (surv["point"] == i).any() else 0.0
-            if len(k):
+            mine = surv[surv["point"] == i]
+            longest = float(mine["duration"].max()) if len(mine) else 0.0
+            jams = int(mine["event"].sum()) if len(mine) else 0
+            drawn = False
+            if len(k) and jams > 0:
                 ts = np.concatenate([[0.0], k["time"], [max(longest, k["time"].iloc[-1])]])
                 ss = np.concatenate([[1.0], k["survival"], [k["survival"].iloc[-1]]])
                 ok = ss > 0
                 ax.step(ts[ok], ss[ok], where="post", color=c)
                 if ok.any():
                     lowest = min(lowest, float(ss[ok].min()))
-                used.add(d)
+                drawn = True
             tau = st.get(i, "tau_mle")
-            if tau is not None and longest > 0:
+            fitted = tau is not None and longest > 0 and jams >= MIN_JAMS_FOR_FIT
+            if fitted:
                 tt = np.linspace(0, longest, 100)
                 ax.plot(tt, np.exp(-tt / tau), "--", color=c, lw=0.9)
+            if drawn:
+                handles.append(plt.Line2D([], [], color=c, lw=1.2))
+                labels.append("%g cm: %s%s" % (d, jam_text(jams), "" if fitted else ", no fit"))
+            else:  # no jam: no curve to draw, but the outlet is named
+                handles.append(plt.Line2D([], [], color=c, lw=0))
+                labels.append("%g cm: %s, no curve" % (d, jam_text(jams)))
         ax.set_yscale("log")
         ax.set_ylim(max(1e-3, lowest * 0.5), 1.2)
         ax.set_xlim(left=0)
@@ -187,10 +223,11 @@ def plot_survival(st, width):
         ax.set_ylabel("S(t)")
         if g:
             ax.set_title(g)
-    handles, labels = D_legend(st, [d for d in st.Ds if d in used],
-                               [(plt.Line2D([], [], color="0.3", ls="--", lw=0.9),
-                                 r"exp($-t/\tau$)")])
-    shared_legend(fig, handles, labels, width)
+        ax.legend(handles, labels, loc="lower left", fontsize=6.5, handlelength=1.2,
+                  borderaxespad=0.3, labelspacing=0.25, title="D: jams", title_fontsize=6.5)
+    shared_legend(fig, [plt.Line2D([], [], color="0.3", lw=1.2),
+                        plt.Line2D([], [], color="0.3", ls="--", lw=0.9)],
+                  ["Kaplan-Meier", r"exp($-t/\tau$), from %d jams on" % MIN_JAMS_FOR_FIT], width)
     return fig
 
 
@@ -199,8 +236,10 @@ def plot_survival(st, width):
 def plot_jam_rate(st, width):
     extra = 3
     fig, (ax_t, ax_r) = layout(st, 2, width, panel_h=2.3,
-                               legend_rows=legend_rows(list(st.groups) + ["no jams: tau > bound"] * extra, width))
+                               legend_rows=legend_rows(list(st.groups) + ["no jams: tau > 95 % bound"] * extra,
+                                                       width))
     any_fit = {"exp": False, "pow": False}
+    bound_handle = None  # the first bound drawn: the key shows it as drawn
     handles, labels = [], []
     lowest_rate = []  # the fits' curves must not stretch the rate axis beyond the data
     for g, rows in st.groups.items():
@@ -222,9 +261,14 @@ def plot_jam_rate(st, width):
             ax_r.errorbar(D, 1 / tau, yerr=[1 / tau - 1 / hi, 1 / lo - 1 / tau], fmt=m, color=c,
                           capsize=2, ms=3)
             lowest_rate.append(float(np.min(1 / hi)))
-        if bound:
-            ax_t.plot(bound_D, bound, m, color=c, mfc="none", ms=4)
-            ax_t.plot(bound_D, bound, "^", color=c, ms=3)
+        if bound:  # no jam at these outlets: only a bound, drawn as one (open, with an arrow)
+            bound = np.array(bound)
+            drawn = ax_t.errorbar(bound_D, bound, yerr=[np.zeros(len(bound)), bound],
+                                  lolims=True, fmt=m, mfc="none", color=c, capsize=2, ms=3)
+            bound_handle = bound_handle or drawn
+            ax_r.errorbar(bound_D, 1 / bound, yerr=[0.5 / bound, np.zeros(len(bound))],
+                          uplims=True, fmt=m, mfc="none", color=c, capsize=2, ms=3)
+            lowest_rate.append(float(np.min(0.5 / bound)))
         handles.append(plt.Line2D([], [], color=c, marker=m, ls="none", ms=3))
         labels.append(g or "all points")
         fit = st.fit_row("jam_rate", g) if st.s.has_analysis else None
@@ -255,8 +299,9 @@ def plot_jam_rate(st, width):
     if any_fit["pow"]:
         handles.append(plt.Line2D([], [], color="0.3", ls=":", lw=1.1))
         labels.append("power-law fit")
-    handles.append(plt.Line2D([], [], color="0.3", marker="^", ls="none", ms=3))
-    labels.append(r"no jams: $\tau$ > bound")
+    if bound_handle is not None:  # an open marker with the arrow, as drawn
+        handles.append(bound_handle)
+        labels.append(r"no jams: $\tau$ > 95 % bound")
     shared_legend(fig, handles, labels, width)
     return fig
 
@@ -606,8 +651,11 @@ def has_avalanches(store):
 def plot_avalanche(st, width):
     fig, (ax_s, ax_d) = layout(st, 2, width, panel_h=2.3,
                                legend_rows=legend_rows(list(st.groups) + ["exponential fit",
-                                                                          "power-law fit"], width))
+                                                                          "power-law fit"]
+                                                       + [D_text(d) for d in st.Ds]
+                                                       + [r"exp(-s/<s>)"], width))
     surv = st.s.survival
+    in_ccdf = []  # outlets drawn in the distribution panel, in their colours
     handles, labels = [], []
     fits = {"exp": False, "pow": False}
     for g, rows in st.groups.items():
@@ -649,6 +697,8 @@ def plot_avalanche(st, width):
             d = float(st.points.at[i, "D_cm"])
             ccdf = 1.0 - np.arange(len(sz)) / len(sz)
             ax_d.step(sz, ccdf, where="post", color=st.D_colour[d], lw=0.9)
+            if d not in in_ccdf:
+                in_ccdf.append(d)
             mean = st.get(i, "mean_avalanche")
             if mean:
                 ss = np.linspace(0, sz.max(), 50)
@@ -665,6 +715,13 @@ def plot_avalanche(st, width):
     if fits["pow"]:
         handles.append(plt.Line2D([], [], color="0.3", ls=":", lw=1.1))
         labels.append("power-law fit")
+    # the distribution panel's colours are the outlets'
+    d_handles, d_labels = D_legend(st, sorted(in_ccdf))
+    handles += d_handles
+    labels += d_labels
+    if in_ccdf:
+        handles.append(plt.Line2D([], [], color="0.3", ls="--", lw=0.7))
+        labels.append(r"exp($-s/\langle s\rangle$)")
     shared_legend(fig, handles, labels, width)
     return fig
 
@@ -675,14 +732,18 @@ def plot_arch_sizes(st, width):
                        legend_rows=legend_rows([D_text(d) for d in st.Ds], width))
     used = set()
     for ax, (g, rows) in zip(axes, st.groups.items()):
-        for i in rows:
+        # one bar per outlet and size, side by side: a size no arch had is an empty place, not
+        # a line drawn across it
+        drawn = [i for i in rows if ((arches["point"] == i) & (arches["disks"] > 0)).any()]
+        w = 0.8 / max(1, len(drawn))
+        for k, i in enumerate(drawn):
             a = arches[(arches["point"] == i) & (arches["disks"] > 0)]
-            if not len(a):
-                continue
             d = float(st.points.at[i, "D_cm"])
             counts = a["disks"].value_counts().sort_index()
-            ax.plot(counts.index, counts.to_numpy() / len(a), "o-", color=st.D_colour[d], ms=3)
+            ax.bar(counts.index.to_numpy() + (k - (len(drawn) - 1) / 2) * w,
+                   counts.to_numpy() / len(a), width=w, color=st.D_colour[d], lw=0)
             used.add(d)
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
         ax.set_xlabel("disks in the arch")
         ax.set_ylabel("fraction of arches")
         if g:
@@ -697,6 +758,22 @@ def plot_arch_sizes(st, width):
 FIGURES = [("survival", plot_survival), ("jam_rate", plot_jam_rate),
            ("beverloo", plot_beverloo), ("k_theta", plot_k_theta),
            ("in_hopper", plot_in_hopper), ("jam_onsets", plot_jam_onsets)]
+
+
+def nothing_to_draw(store):
+    """Why a store has nothing to draw (no realization, or every one failed), or None."""
+    real = store.realizations
+    if not len(real):
+        return "'%s' holds no realization yet: nothing to draw" % store.path
+    failed = real["status"] == "failed"
+    if failed.all():
+        reasons = real["message"] if "message" in real else []
+        first = next((str(m) for m in reasons if str(m)), "")
+        return ("every realization of '%s' failed (%d of %d%s): nothing to draw; "
+                "`campaign status %s` lists the failures"
+                % (store.path, int(failed.sum()), len(real),
+                   "; the first: %s" % first if first else "", store.path))
+    return None
 
 
 def figures(store, width=WIDTHS["page"]):
@@ -743,6 +820,9 @@ def main(argv=None):
     if not store.has_analysis:
         fail("'%s' has no /analysis group: run `campaign analyze %s` first"
              % (args.store, args.store))
+    nothing = nothing_to_draw(store)
+    if nothing:
+        fail(nothing, 3)
     os.makedirs(args.out, exist_ok=True)
     width = WIDTHS[args.width]
     written = []
@@ -753,7 +833,8 @@ def main(argv=None):
             fig = plot_fields_comparison(Study(store), store.fields(), args.compare, args.field,
                                          width)
             if args.compare_out:
-                fig.savefig(args.compare_out)
+                fig.savefig(args.compare_out, metadata=METADATA.get(
+                    os.path.splitext(args.compare_out)[1].lstrip(".").lower()))
                 plt.close(fig)
                 written.append(args.compare_out)
             else:

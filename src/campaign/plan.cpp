@@ -4,6 +4,8 @@
 #include <charconv>
 #include <cmath>
 #include <map>
+#include <string_view>
+#include <variant>
 
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
@@ -164,6 +166,19 @@ std::string scene_text(const engine::SceneParams& p) {
     return l.take();
 }
 
+namespace {
+
+// A number of a point's parameters (file units, as written), else `fallback`.
+double written_number(const std::vector<core::Setting>& parameters, std::string_view name,
+                      double fallback) {
+    for (const auto& s : parameters)
+        if (s.name == name)
+            if (const double* v = std::get_if<double>(&s.value)) return *v;
+    return fallback;
+}
+
+}  // namespace
+
 store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
     store::CampaignPlan plan;
     plan.name = spec.name;
@@ -172,8 +187,10 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
         store::PointPlan p;
         p.label = pt.label;
         p.scene = scene_text(pt.scene);
-        p.D_cm = pt.scene.hopper.outlet / core::cm;
-        p.theta_deg = pt.scene.hopper.theta / core::deg;
+        // As the sweep file wrote them (60, not the quotient 59.99999999999999): /points and
+        // the tables read from it must find `theta_deg == 60`.
+        p.D_cm = written_number(pt.parameters, "D_cm", pt.scene.hopper.outlet / core::cm);
+        p.theta_deg = written_number(pt.parameters, "theta_deg", pt.scene.hopper.theta / core::deg);
         p.particles = pt.scene.particles.count;
         p.settings = pt.settings;
         p.parameters = pt.parameters;

@@ -7,7 +7,9 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <system_error>
 
 #include "cli/parse.hpp"
 #include "hopper/core/error.hpp"
@@ -61,6 +63,14 @@ std::string existing_store(const po::variables_map& vm) {
 
 fs::path analysis_dir() {
     if (const char* d = std::getenv("HOPPER_ANALYSIS_DIR"); d && *d) return d;
+    // An installed campaign (`cmake --install`): PREFIX/bin/campaign beside
+    // PREFIX/share/hopper/analysis; a build tree's campaign uses the source tree's scripts.
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+        const fs::path installed = exe.parent_path().parent_path() / "share/hopper/analysis";
+        if (fs::exists(installed / "plots.py", ec)) return installed;
+    }
     return HOPPER_ANALYSIS_DIR;
 }
 
@@ -131,7 +141,7 @@ void print_plot_help(std::ostream& os) {
           "jam onsets, and the field maps. Legends name only the settings that vary. Runs\n"
           "analysis/plots.py with /usr/bin/python3 (python3-matplotlib, -pandas, -h5py).\n\n"
           "exit codes: 0 figures written, 2 bad arguments or a store without /analysis,\n"
-          "            1 other errors\n\n"
+          "            3 no realization to draw (every one failed), 1 other errors\n\n"
        << plot_options();
 }
 

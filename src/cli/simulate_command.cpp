@@ -38,7 +38,7 @@ po::options_description simulate_options() {
          "hopper.pvd (open hopper.pvd in ParaView) and LAMMPS dump files hopper.NNNNNN.dump "
          "(OVITO); earlier frames in DIR are removed")  //
         ("snapshot-format", po::value<std::string>()->value_name("LIST"),
-         "vtu, dump or vtu,dump (default vtu,dump)")  //
+         "vtu (binary, compressed) or vtu-ascii, and/or dump (default vtu,dump)")  //
         ("snapshot-interval", po::value<std::string>()->value_name("S"),
          "seconds of simulated time between snapshots (default 0.05)")                            //
         ("progress", po::bool_switch(), "progress line on stderr every 0.5 s of simulated time")  //

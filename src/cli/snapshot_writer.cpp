@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <regex>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -104,24 +105,28 @@ void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t step,
         append_number(out, lh[1]);
         out += '\n';
     }
-    out += "ITEM: ATOMS id type x y z vx vy vz radius omegaz\n";
+    out += "ITEM: ATOMS id type x y z vx vy vz radius omegaz contact_force\n";
     auto line = [&](std::int64_t id, int type, double x, double y, double vx, double vy, double r,
-                    double w) {
+                    double w, double f) {
         append_int(out, id);
         out += ' ';
         append_int(out, type);
-        for (double v : {x, y, 0.0, vx, vy, 0.0, r, w}) {
+        for (double v : {x, y, 0.0, vx, vy, 0.0, r, w, f}) {
             out += ' ';
             append_number(out, v);
         }
         out += '\n';
     };
+    // |F_n| summed over the contacts (N); 0 where the snapshot carries none
+    const auto force = [](std::span<const double> f, std::size_t i) {
+        return i < f.size() ? f[i] : 0.0;
+    };
     for (std::size_t i = 0; i < n_mobile; ++i)
         line(static_cast<std::int64_t>(s.id[i]) + 1, 1, s.x[i], s.y[i], s.vx[i], s.vy[i],
-             s.radius[i], s.omega[i]);
+             s.radius[i], s.omega[i], force(s.contact_force, i));
     for (std::size_t i = 0; i < n_wall; ++i)
         line(wall_id_base + 1 + static_cast<std::int64_t>(i), 2, s.wall_x[i], s.wall_y[i], 0.0, 0.0,
-             s.wall_radius[i], 0.0);
+             s.wall_radius[i], 0.0, force(s.wall_contact_force, i));
     os << out;
 }
 
@@ -132,14 +137,17 @@ SnapshotFormats parse_snapshot_formats(const std::string& text) {
         const std::size_t comma = text.find(',', begin);
         const std::string one =
             text.substr(begin, comma == std::string::npos ? comma : comma - begin);
-        bool& flag = one == "vtu" ? f.vtu : f.dump;
-        if ((one != "vtu" && one != "dump") || flag)
-            throw core::ConfigError("--snapshot-format: " +
-                                    (one == "vtu" || one == "dump"
-                                         ? "'" + one + "' given twice"
-                                         : "unknown format '" + one + "'") +
-                                    " in '" + text + "' (allowed: vtu, dump or vtu,dump)");
+        const bool vtu = one == "vtu" || one == "vtu-ascii";
+        bool& flag = vtu ? f.vtu : f.dump;
+        if ((!vtu && one != "dump") || flag)
+            throw core::ConfigError(
+                "--snapshot-format: " +
+                (vtu || one == "dump"
+                     ? (vtu && flag ? std::string("VTU given twice") : "'" + one + "' given twice")
+                     : "unknown format '" + one + "'") +
+                " in '" + text + "' (allowed: vtu or vtu-ascii, and dump; e.g. vtu,dump)");
         flag = true;
+        if (one == "vtu-ascii") f.vtu_ascii = true;
         if (comma == std::string::npos) break;
         begin = comma + 1;
     }
@@ -196,7 +204,9 @@ std::filesystem::path SnapshotWriter::write(const engine::Snapshot& s) {
     }
     if (formats_.vtu) {
         written = frame_path(dir_, frames_, "vtu");
-        write_file(written, [&](std::ostream& os) { write_vtu(os, s, step); });
+        write_file(written, [&](std::ostream& os) {
+            write_vtu(os, s, step, formats_.vtu_ascii ? VtuEncoding::ascii : VtuEncoding::binary);
+        });
         times_.push_back(s.sim_time);
         std::vector<PvdEntry> entries;
         for (std::size_t k = 0; k < times_.size(); ++k)

@@ -1,9 +1,10 @@
 #pragma once
 // Particle snapshots (`campaign simulate ... --snapshots DIR`), one file per frame, in either or
 // both of two formats:
-//   vtu   VTK XML unstructured grids DIR/hopper.<frame>.vtu and the series DIR/hopper.pvd, which
-//         ParaView opens natively (cli/vtk_writer.hpp);
-//   dump  LAMMPS text dump files DIR/hopper.<frame>.dump (OVITO, LAMMPS tools).
+//   vtu        VTK XML unstructured grids DIR/hopper.<frame>.vtu and the series DIR/hopper.pvd,
+//              which ParaView opens natively (cli/vtk_writer.hpp), binary and compressed;
+//   vtu-ascii  the same with the arrays as text (larger; for reading by eye or by scripts);
+//   dump       LAMMPS text dump files DIR/hopper.<frame>.dump (OVITO, LAMMPS tools).
 //
 // The frame index is zero-padded to 6 digits (000000, 000001, ...). Any hopper.<digits>.dump,
 // hopper.<digits>.vtu and hopper.pvd already in DIR are removed when the writer starts, so a
@@ -20,7 +21,7 @@
 //   xlo xhi
 //   ylo yhi
 //   zlo zhi
-//   ITEM: ATOMS id type x y z vx vy vz radius omegaz
+//   ITEM: ATOMS id type x y z vx vy vz radius omegaz contact_force
 //   <one line per particle: mobile particles first, then wall particles>
 //
 // Units SI: metres, m/s, rad/s. The 2D scene lies in the plane z = 0; the box is the bounding box
@@ -33,6 +34,8 @@
 //     ids of wall particles are not in the snapshot, so walls are numbered from 1'000'000'001 on,
 //     far above any mobile id. Wall velocities and omegaz are written as 0 (the snapshot has none;
 //     walls move only while the hopper is shaken).
+//   - contact_force: the sum of |F_n| over the particle's contacts (N), as in the VTU frames; OVITO
+//     maps it to a particle property of that name (colour coding, histograms).
 // OVITO reads ITEM: TIME as the frame's "Time" attribute.
 
 #include <cstdint>
@@ -62,8 +65,10 @@ void write_dump(std::ostream& os, const engine::Snapshot& s, std::int64_t step, 
 struct SnapshotFormats {
     bool vtu = true;
     bool dump = true;
+    bool vtu_ascii = false;  // the VTU arrays as text (vtu-ascii), not compressed binary
 };
-// "vtu", "dump" or "vtu,dump" (either order). Throws core::ConfigError naming the bad entry.
+// A comma-separated list of "vtu" or "vtu-ascii" and "dump" (either order; default vtu,dump).
+// Throws core::ConfigError naming the bad entry.
 SnapshotFormats parse_snapshot_formats(const std::string& text);
 
 class SnapshotWriter {

@@ -11,8 +11,17 @@
 //   radius            Float64  m
 //   velocity          Float64  3 components, m/s (walls 0)
 //   angular_velocity  Float64  rad/s about z (walls 0)
+//   contact_force     Float64  sum of |F_n| over the particle's contacts, N
 // Field data: TIME (s since the fill) and TIMESTEP (the step number), as ParaView's readers
-// name them. Contact forces are not in engine::Snapshot, so they are not written.
+// name them.
+//
+// Encoding: binary by default -- each array's little-endian bytes compressed with zlib in
+// blocks of 32 KiB and written inline in base64 after VTK's UInt64 compression header
+// (number of blocks, block size, size of the last partial block, compressed size of each
+// block; the header and the blocks each base64-encoded), the format ParaView writes itself with
+// compressor="vtkZLibDataCompressor". Exact: the viewer sees the simulated doubles' bits.
+// ASCII on request (shortest round-trip text, the same numbers): readable, about 2.2x larger
+// (a quickstart frame of 600 disks: 88 kB as text, 39 kB binary).
 
 #include <cstdint>
 #include <ostream>
@@ -23,7 +32,10 @@
 
 namespace hopper::cli {
 
-void write_vtu(std::ostream& os, const engine::Snapshot& s, std::int64_t step);
+enum class VtuEncoding { binary, ascii };
+
+void write_vtu(std::ostream& os, const engine::Snapshot& s, std::int64_t step,
+               VtuEncoding encoding = VtuEncoding::binary);
 
 struct PvdEntry {
     double time = 0.0;  // s

@@ -240,7 +240,7 @@ SceneParams Parser::build_scene(const std::vector<Given>& overrides,
     for (const auto& [name, g] : merged)
         g.def->apply(p, g.value);
     // Walls default to the particles' material and to wall particles of diameter d_large
-    // (spec/physics.md): "follow" the values this scene ends up with unless walls are given.
+    // (docs/model.md): "follow" the values this scene ends up with unless walls are given.
     if (!merged.count("walls.e_n")) p.material.wall.e_n = p.material.system.e_n;
     if (!merged.count("walls.mu")) p.material.wall.mu = p.material.system.mu;
     if (!merged.count("walls.particle_diameter_cm")) p.hopper.wall_diameter = p.particles.d_large;

@@ -281,7 +281,7 @@ void validate_scene(const SceneParams& p) {
 double hertz_collision_time(double m, double d, double youngs_modulus, double poisson_ratio,
                             double v0) {
     // t_col = I(b) ((1+b)/2)^(1/(2+b)) (m / (E d^(1-b)))^(1/(2+b)) v0^(-b/(2+b)),  b = 1/2,
-    // E = Y / (3 (1 - sigma^2)),  I(b) = 2 int_0^1 dy / sqrt(1 - y^(2+b))   (spec/physics.md)
+    // E = Y / (3 (1 - sigma^2)),  I(b) = 2 int_0^1 dy / sqrt(1 - y^(2+b))   (docs/model.md)
     // With p = 2 + b: int_0^1 (1 - y^p)^(-1/2) dy = B(1/p, 1/2) / p
     //                = Gamma(1/p) Gamma(1/2) / (p Gamma(1/p + 1/2)).
     const double b = 0.5;
@@ -308,7 +308,7 @@ DerivedConstants derive_constants(const SceneParams& p) {
     const auto& s = p.particles;
     const auto& mat = p.material;
     DerivedConstants c{};
-    // m = rho pi d^2/4 h,  I = m d^2 / 8   (spec/physics.md, particles)
+    // m = rho pi d^2/4 h,  I = m d^2 / 8   (docs/model.md, particles)
     auto mass = [&](double d) { return s.density * pi * d * d / 4.0 * s.thickness; };
     c.m_small = mass(s.d_small);
     c.m_large = mass(s.d_large);

@@ -63,7 +63,7 @@ SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants&
     sc.gravity = Vec2(0.0, -p.gravity);
     sc.skin = p.integrator.skin * p.particles.d_small;
     sc.max_overlap = p.protocol.max_overlap * p.particles.d_small;
-    // k_t = kt_over_kn k_n, gamma_t = gamma_n / 2   (spec/physics.md, tangential force; the
+    // k_t = kt_over_kn k_n, gamma_t = gamma_n / 2   (docs/model.md, tangential force; the
     // ratio is material.gamma_t_over_gamma_n, 0.5 by default)
     const double gt = p.material.gamma_t_over_gamma_n;
     const bool spring_only = p.material.slip_rule == SlipRule::spring_only;

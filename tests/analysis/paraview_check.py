@@ -1,16 +1,20 @@
-"""Run by pvpython (ParaView's own Python): loads a snapshot series (hopper.pvd) and a field map
-(.vti) with ParaView's native readers, checks what they hold and renders each to a PNG.
+"""Run by pvpython (ParaView's own Python): loads a snapshot series (hopper.pvd) with the README's
+ParaView recipe (its pvpython block, run as printed but for the series' path) and a field map
+(.vti) with ParaView's native readers, checks what they hold and renders each to a PNG
+(paraview.sh fails a render of fewer than 10 colours: the flat colour of a recipe that leaves
+"Use Scale Function" on).
 usage: pvpython paraview_check.py SERIES.pvd FRAMES POINTS R_MIN R_MAX FIELD.vti CELLS
-                                  SPEED_MIN SPEED_MAX OUT_DIR"""
+                                  SPEED_MIN SPEED_MAX OUT_DIR README.md"""
 import math
 import os
 import sys
 
 from paraview.simple import (ColorBy, CreateRenderView, GetAnimationScene, OpenDataFile,
-                             ResetCamera, SaveScreenshot, Show, UpdatePipeline)
+                             ResetCamera, SaveScreenshot, Show, UpdatePipeline)  # noqa: F401
 
-pvd, frames, points, r_min, r_max, vti, cells, s_min, s_max, out = sys.argv[1:11]
+pvd, frames, points, r_min, r_max, vti, cells, s_min, s_max, out, readme = sys.argv[1:12]
 bad = []
+MARKER = "<!-- paraview recipe: tests/analysis/paraview_check.py runs this block -->"
 
 
 def close(a, b, what):
@@ -18,7 +22,16 @@ def close(a, b, what):
         bad.append("%s: ParaView reads %r, expected %r" % (what, a, b))
 
 
-series = OpenDataFile(pvd)
+# the README's recipe: the python block after the marker
+text = open(readme).read()
+if MARKER not in text:
+    sys.exit("%s has no ParaView recipe (the line '%s')" % (readme, MARKER))
+block = text[text.index(MARKER):].split("```python\n", 1)[1].split("```", 1)[0]
+if '"frames/hopper.pvd"' not in block:
+    sys.exit("the README's recipe does not open \"frames/hopper.pvd\"")
+recipe = {}
+exec(block.replace('"frames/hopper.pvd"', repr(pvd)), recipe)
+series, view, disp = recipe["series"], recipe["view"], recipe["disks"]
 times = list(series.TimestepValues)
 if len(times) != int(frames):
     bad.append("the series has %d time steps, expected %d" % (len(times), int(frames)))
@@ -45,16 +58,9 @@ if "contact_force" in series.PointData.keys():
 if series.PointData["velocity"].GetNumberOfComponents() != 3:
     bad.append("velocity is not a 3-vector")
 
-view = CreateRenderView()
+# the recipe's view and display, as the README leaves them; only the picture's size is set here
 view.ViewSize = [600, 800]
 view.OrientationAxesVisibility = 0
-disp = Show(series, view)
-disp.SetRepresentationType("Point Gaussian")
-disp.ScaleByArray = 1
-disp.SetScaleArray = ["POINTS", "radius"]
-disp.UseScaleFunction = 0
-disp.GaussianRadius = 1.0
-ColorBy(disp, ("POINTS", "velocity", "Magnitude"))
 GetAnimationScene().UpdateAnimationUsingDataTimeSteps()
 view.ViewTime = times[-1]
 ResetCamera(view)

@@ -4,7 +4,8 @@
 # - test_hopper_store.py: every table of analysis/hopper_store.py against the raw datasets and
 #   the C++ analysis, and the CSV export;
 # - `campaign plot` in three formats, its figures checked for overlapping or clipped text;
-# - `campaign export --vtk`: one .vti per point; bad arguments exit 2 with a message.
+# - `campaign export --vtk`: one .vti per point; bad arguments exit 2 with a message;
+# - the README's Python example runs, and its sweep file passes `campaign run --dry-run`.
 source "$SRC/tests/campaign/lib.sh"
 for m in matplotlib pandas xarray h5py; do
     "$PY" -c "import $m" 2>/dev/null || { echo "SKIP: python3-$m is missing (./install-deps.sh)"; exit 77; }
@@ -49,6 +50,13 @@ sed -i "s|\"build/quickstart.h5\"|\"$STORE\"|; s|sys.path.insert(0, \"analysis\"
 rm -f survival.png
 "$PY" example.py || fail "the README's Python example failed"
 [ -s survival.png ] || fail "the README's Python example wrote no survival.png"
+
+# the README's 10-line sweep file is a valid campaign (checked, not run)
+awk '/^## A sweep file/ {on = 1} on && /^```toml/ {inside = 1; next} inside && /^```/ {exit}
+     inside {print}' "$SRC/README.md" >first.toml
+[ "$(wc -l <first.toml)" -ge 5 ] || fail "no sweep file found in README.md"
+run_expect 0 first "$EXE" run first.toml --threads 2 --dry-run
+expect_in first.out "D_cm=3 theta_deg=60"
 
 run_expect 2 badfmt "$EXE" plot "$STORE" --format png,gif
 expect_in badfmt.err "unknown format 'gif'"

@@ -8,19 +8,9 @@ import warnings
 import pathlib
 import sys
 
-src = pathlib.Path(sys.argv[1])
-sys.path.insert(0, str(src / "analysis"))
-sys.path.insert(0, str(src / "tests" / "analysis"))
+import figure_env
 
-try:
-    import matplotlib
-    import pandas  # noqa: F401
-    import xarray  # noqa: F401
-except ImportError as e:
-    print("SKIP: %s (install python3-matplotlib, -pandas, -xarray: ./install-deps.sh)" % e)
-    sys.exit(77)
-
-matplotlib.use("Agg")
+src = figure_env.setup()
 import matplotlib.pyplot as plt  # noqa: E402
 
 import layout_check  # noqa: E402

@@ -48,6 +48,18 @@ with open_store(store_path) as s:
           "empty_time is NaN exactly where has_empty_time is FALSE")
     check(set(r["status"]) <= {"complete", "arrested", "time_limit", "failed"}, "status names")
     check(np.array_equal(r["seed"].to_numpy(), raw["seed"][:]), "seeds")
+    # settings as the sweep file wrote them (D_cm = [1.9, 2.6, 3.5], theta_deg = [45, 60]), in
+    # the store itself and in what reads it; not 59.99999999999999
+    check(sorted(set(f["points/theta_deg"][:])) == [45.0, 60.0],
+          "/points/theta_deg as written: %r" % sorted(set(f["points/theta_deg"][:])))
+    check(sorted(set(f["points/D_cm"][:])) == [1.9, 2.6, 3.5],
+          "/points/D_cm as written: %r" % sorted(set(f["points/D_cm"][:])))
+    check(len(p.query("theta_deg == 60")) == 3 and len(r.query("theta_deg == 60")) == 6,
+          "query('theta_deg == 60'): %r" % sorted(set(p["theta_deg"])))
+    check(sorted(set(p["D_cm"])) == [1.9, 2.6, 3.5], "D_cm as written: %r" % sorted(set(p["D_cm"])))
+    # the seed also as text that no reader takes for a number (R's read.csv makes a double of
+    # 15669779132130233510)
+    check(list(r["seed_str"]) == ["s%d" % v for v in raw["seed"][:]], "seed_str")
 
     sv = s.survival
     lengths = sv.groupby("row").size().reindex(range(len(r)), fill_value=0).to_numpy()
@@ -94,6 +106,21 @@ with open_store(store_path) as s:
                  "analysis", "beverloo", "jam_rate", "km", "fields"):
         path = csv_dir / (name + ".csv")
         check(path.exists(), "export wrote %s" % path.name)
+    if (csv_dir / "realizations.csv").exists():
+        back = pd.read_csv(csv_dir / "realizations.csv")
+        check(back["theta_deg"].isin([45.0, 60.0]).all(), "realizations.csv theta_deg: %r"
+              % sorted(set(back["theta_deg"])))
+        # a reader that types columns by whether every value parses as a number (R's
+        # type.convert, pandas) keeps seed_str as text, exactly
+        check(back["seed_str"].dtype == object and
+              [int(t[1:]) for t in back["seed_str"]] == [int(v) for v in raw["seed"][:]],
+              "realizations.csv seed_str round trip")
+        for t in back["seed_str"]:
+            try:
+                float(t)
+                check(False, "seed_str %r reads as a number" % t)
+            except ValueError:
+                pass
     if (csv_dir / "survival.csv").exists():
         back = pd.read_csv(csv_dir / "survival.csv")
         check(len(back) == len(sv) and np.allclose(back["duration"], sv["duration"], rtol=0,

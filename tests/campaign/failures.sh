@@ -1,6 +1,7 @@
 #!/bin/bash
 # Failed realizations: stored with their reason, shown by status (text and JSON) and in the
-# summary, exit code 3, and not run again by the next `campaign run` (the engine is
+# summary, exit code 3, refused by `campaign plot` (nothing to draw), and not run again by the
+# next `campaign run` (the engine is
 # deterministic: the same seed fails the same way).
 source "$(dirname "$0")/lib.sh"
 run_expect 3 first "$EXE" run "$DATA/failing.toml" --store "$WORK/f.h5" --progress-interval 0
@@ -18,6 +19,13 @@ assert (s["total"], s["done"], s["failed"], s["pending"], s["errors"]) == (2, 0,
 assert all(f["kind"] == "failed" and "overlap" in f["reason"] for f in s["failures"]), s
 assert s["points"][0]["failed"] == 2
 PY
+# nothing to draw: `campaign plot` says why and exits 3, instead of drawing empty figures
+if "$PY" -c "import matplotlib, pandas" 2>/dev/null; then
+    run_expect 3 plot "$EXE" plot "$WORK/f.h5" --out "$WORK/f_plots"
+    expect_in plot.err "every realization of '$WORK/f.h5' failed (2 of 2; the first: "
+    expect_in plot.err "nothing to draw"
+    [ ! -e "$WORK/f_plots" ] || fail "campaign plot made $WORK/f_plots for a store with nothing to draw"
+fi
 run_expect 3 second "$EXE" run "$DATA/failing.toml" --store "$WORK/f.h5" --progress-interval 0
 expect_in second.err "2 stored (2 failed), 0 to run"
 "$PY" - "$WORK/f.h5" <<'PY' || fail "failed results in the HDF5 file"

@@ -301,7 +301,7 @@ TEST(CampaignCli, SnapshotsWriteDumpFrames) {
     EXPECT_EQ(lines[4], "ITEM: NUMBER OF ATOMS");
     const int atoms = std::stoi(lines[5]);
     EXPECT_GT(atoms, 250);  // 250 mobile particles plus the walls
-    EXPECT_EQ(lines[10], "ITEM: ATOMS id type x y z vx vy vz radius omegaz");
+    EXPECT_EQ(lines[10], "ITEM: ATOMS id type x y z vx vy vz radius omegaz contact_force");
     EXPECT_EQ(static_cast<int>(lines.size()), 11 + atoms);
     int mobile = 0, walls = 0;
     for (std::size_t i = 11; i < lines.size(); ++i) {

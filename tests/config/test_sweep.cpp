@@ -89,7 +89,7 @@ struct Shipped {
 };
 
 TEST(ShippedCampaigns, ParseWithTheExpectedPointAndTaskCounts) {
-    // Counts from spec/paper-campaigns.md (see the comment at the top of each file).
+    // Counts from docs/studies.md (see the comment at the top of each file).
     const Shipped files[] = {
         {"campaigns/tiny.toml", 2, 4},
         {"campaigns/adaptive-example.toml", 3, 36},  // rounds: the plan holds max_realizations
@@ -273,7 +273,7 @@ TEST(ShippedCampaigns, PaperFilesUseThePublishedFullSizeSetup) {
 
 TEST(ShippedCampaigns, SingleMaterialRowsAreThePublishedOnes) {
     const SweepFile s = load_sweep(source_dir / "campaigns/paper/single-material.toml");
-    // (system e_n, wall e_n, system mu, wall mu), spec/paper-campaigns.md study 1.
+    // (system e_n, wall e_n, system mu, wall mu), docs/studies.md study 1.
     const double rows[12][4] = {{0.5, 0.5, 0.5, 0.8}, {0.5, 0.5, 0.6, 0.8}, {0.5, 0.5, 0.7, 0.8},
                                 {0.5, 0.5, 0.8, 0.8}, {0.8, 0.5, 0.5, 0.8}, {0.8, 0.5, 0.6, 0.8},
                                 {0.8, 0.5, 0.7, 0.8}, {0.8, 0.5, 0.8, 0.8}, {0.5, 0.3, 0.8, 0.8},

@@ -1,6 +1,6 @@
 #pragma once
 // Shared constants and builders for the System-level physics tests. The material is the one of
-// the published study (spec/physics.md): tau_c = 8.0e-4 s for two large disks, so
+// the published study (docs/model.md): tau_c = 8.0e-4 s for two large disks, so
 // k_n = pi^2 m_large / (2 tau_c^2) = 1149 N/m, gamma_n = -2 ln(e_n) / tau_c, k_t = 0.8 k_n,
 // gamma_t = gamma_n / 2. Everything is recomputed here from the definitions, not taken from
 // derive_constants(), so that these tests do not inherit its mistakes.
@@ -77,7 +77,7 @@ inline int add_disk(System& s, const Vec2& pos, double d, const Vec2& vel = Vec2
     return s.add_particle(pos, d, disk_mass(d), disk_inertia(d), vel, omega);
 }
 
-// The exact damped linear oscillator of one contact (spec/physics.md, normal force):
+// The exact damped linear oscillator of one contact (docs/model.md, normal force):
 // mbar x'' = -k_n x - gamma_n mbar x', x(0) = 0, x'(0) = v0 > 0. With omega0^2 = k_n/mbar,
 // beta = gamma_n/2, omega = sqrt(omega0^2 - beta^2): x(t) = v0/omega e^{-beta t} sin(omega t),
 // so the overlap returns to zero at t_contact = pi/omega with x' = -v0 e^{-beta pi/omega}.

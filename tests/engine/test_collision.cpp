@@ -1,5 +1,5 @@
 // Binary collisions integrated by System, compared with the exact solution of the contact model
-// (spec/physics.md, normal and tangential force). No gravity, so the particles move freely
+// (docs/model.md, normal and tangential force). No gravity, so the particles move freely
 // before and after the contact.
 
 #include <gtest/gtest.h>

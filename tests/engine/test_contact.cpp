@@ -1,5 +1,5 @@
 // Pure checks of the contact laws in include/hopper/engine/contact.hpp against the formulas of
-// spec/physics.md ("Contact forces"), each written out again here from the spec. Everything is
+// docs/model.md ("Contact forces"), each written out again here from the spec. Everything is
 // exact arithmetic on a few numbers, so tolerances are a few ulp (1e-12 relative) unless noted.
 
 #include <gtest/gtest.h>

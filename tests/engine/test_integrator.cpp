@@ -1,4 +1,4 @@
-// Time integrators (spec/physics.md, "Time integration"): energy conservation of elastic,
+// Time integrators (docs/model.md, "Time integration"): energy conservation of elastic,
 // frictionless systems and the observed order of convergence of Verlet and Gear.
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Derived constants and scene validation (spec/physics.md, "Particles" and "Material and
+// Derived constants and scene validation (docs/model.md, "Particles" and "Material and
 // stiffness"). Every expected value is computed here independently of src/engine/params.cpp:
 // the Hertz integral by quadrature instead of the Beta-function closed form, the masses and k_n
 // straight from their defining formulas.

@@ -1,4 +1,4 @@
-// The realization protocol on tiny hoppers (spec/physics.md, realization protocol; issue 2's
+// The realization protocol on tiny hoppers (docs/model.md, realization protocol; issue 2's
 // required behaviour tests). Each run takes about a second.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The hopper scene: wall outline, gate and fill lattice (spec/physics.md, geometry and step 1).
+// The hopper scene: wall outline, gate and fill lattice (docs/model.md, geometry and step 1).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 // with a core::ConfigError naming the file, the key, the value and the allowed range; unknown
 // keys are errors.
 //
-// File layout (all sections optional; defaults are the published values of spec/physics.md):
+// File layout (all sections optional; defaults are the published values of docs/model.md):
 //   [hopper]     width_cm particles small_fraction d_small_cm d_large_cm thickness_cm
 //                density_kg_m3 D_cm theta_deg
 //   [material]   e_n mu kt_over_kn youngs_modulus_pa poisson_ratio collision_time_s

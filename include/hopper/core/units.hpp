@@ -9,6 +9,6 @@ namespace hopper::core {
 inline constexpr double pi = std::numbers::pi;
 inline constexpr double cm = 1e-2;                // metres per centimetre
 inline constexpr double deg = pi / 180.0;         // radians per degree
-inline constexpr double standard_gravity = 9.81;  // m/s^2 (spec/physics.md, particles)
+inline constexpr double standard_gravity = 9.81;  // m/s^2 (docs/model.md, particles)
 
 }  // namespace hopper::core

@@ -1,5 +1,5 @@
 #pragma once
-// Contact laws (spec/physics.md, "Contact forces"). Each law is a small value type whose
+// Contact laws (docs/model.md, "Contact forces"). Each law is a small value type whose
 // evaluate() is pure and inline; the pair loops in system.cpp are templates over the law, so the
 // choice of law (frictionless / viscous friction / Cundall-Strack spring) is made once at setup
 // and never per contact.
@@ -48,7 +48,7 @@ struct ContactForce {
     Vec2 tangential;
 };
 
-// Signed magnitude of F_n = (k_n x - gamma_n mbar v_n) n   (spec/physics.md, normal force)
+// Signed magnitude of F_n = (k_n x - gamma_n mbar v_n) n   (docs/model.md, normal force)
 HOPPER_HOT_INLINE double normal_magnitude(const ContactParams& p, double mbar, double overlap,
                                           double v_n) {
     return p.k_n * overlap - p.gamma_n * mbar * v_n;
@@ -128,7 +128,7 @@ struct ViscousFrictionLaw {
 
 // Cundall-Strack static friction: a tangential spring xi that starts at zero length when the
 // contact forms, is projected onto the current tangent line, grows by v_t dt per step, and is
-// shortened when the Coulomb cap is active (spec/physics.md, tangential force).
+// shortened when the Coulomb cap is active (docs/model.md, tangential force).
 struct SpringFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
@@ -279,7 +279,7 @@ HOPPER_HOT_INLINE ContactForce SpringFrictionLaw::evaluate(const ContactParams& 
 }
 
 // Relative velocity of the contact points of i and j (n points from j to i):
-// v_ij = v_i - v_j - (R_i w_i + R_j w_j) (z x n)   (spec/physics.md)
+// v_ij = v_i - v_j - (R_i w_i + R_j w_j) (z x n)   (docs/model.md)
 HOPPER_HOT_INLINE Vec2 contact_velocity(const Vec2& v_i, const Vec2& v_j, double R_i, double w_i,
                                         double R_j, double w_j, const Vec2& n) {
     return v_i - v_j - (R_i * w_i + R_j * w_j) * core::perp(n);

@@ -1,5 +1,5 @@
 #pragma once
-// Coarse-grained velocity and pressure fields during the discharge (spec/physics.md,
+// Coarse-grained velocity and pressure fields during the discharge (docs/model.md,
 // "Coarse-grained fields"; off unless a campaign switches them on).
 //
 // Sampling: every `sample_interval` of discharge time (shaking excluded), each particle i in the

@@ -1,6 +1,6 @@
 #pragma once
 // The parameters of one hopper scene, in SI units, with the published values as defaults
-// (spec/physics.md). The config layer fills these from a sweep file; the engine validates them
+// (docs/model.md). The config layer fills these from a sweep file; the engine validates them
 // again (it is usable on its own) with validate_scene().
 
 #include <optional>
@@ -189,7 +189,7 @@ struct SceneParams {
 // Throws core::ConfigError naming the parameter, its value and the allowed range.
 void validate_scene(const SceneParams& p);
 
-// Quantities derived once from the parameters (spec/physics.md, material and stiffness).
+// Quantities derived once from the parameters (docs/model.md, material and stiffness).
 struct DerivedConstants {
     double m_small, m_large;  // kg
     double I_small, I_large;  // kg m^2, I = m d^2 / 8
@@ -218,7 +218,7 @@ double hertz_restitution(double alpha);
 // gamma_n (1/s) for restitution e_n and collision time tau_c in the given damping form.
 double normal_damping_rate(NormalDamping form, double e_n, double tau_c);
 
-// The Hertz collision time t_col (spec/physics.md) for disks of mass m, diameter d, material
+// The Hertz collision time t_col (docs/model.md) for disks of mass m, diameter d, material
 // (Y, sigma), impact speed v0.
 double hertz_collision_time(double m, double d, double youngs_modulus, double poisson_ratio,
                             double v0);

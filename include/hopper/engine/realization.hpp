@@ -1,6 +1,6 @@
 #pragma once
 // One realization of the hopper: fill, settle, discharge, jam detection, shaking, survival and
-// empty times (spec/physics.md, realization protocol). This is the engine's main entry point.
+// empty times (docs/model.md, realization protocol). This is the engine's main entry point.
 
 #include <atomic>
 #include <cstdint>

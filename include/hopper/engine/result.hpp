@@ -1,5 +1,5 @@
 #pragma once
-// What one realization reports (spec/physics.md, "What each realization reports").
+// What one realization reports (docs/model.md, "What each realization reports").
 // Times are seconds of discharge time (shaking excluded) unless stated otherwise.
 
 #include <cstdint>

@@ -1,6 +1,6 @@
 #pragma once
 // The hopper scene: wall particles along the outline, the gate that closes the outlet while the
-// packing settles, and the fill lattice (spec/physics.md, geometry and realization step 1).
+// packing settles, and the fill lattice (docs/model.md, geometry and realization step 1).
 //
 // Coordinates: x horizontal with the outlet centred at x = 0, y up with the outlet at y = 0.
 // Each funnel wall is a row of wall particles whose centres lie on a line at angle theta to the
