@@ -443,6 +443,8 @@ Snapshot write_snapshot(const fs::path& store, const fs::path& out) {
                                    "' exists; a snapshot writes a new store (another path)");
     Snapshot snap;
     snap.writer_active = journal_locked(src);
+    std::error_code ec;
+    fs::create_directories(parent_or_dot(out), ec);
     // The journal is append-only: its bytes up to the moment of reading never change. A record
     // the writer is appending meanwhile is copied incomplete and dropped below as a torn tail.
     {
