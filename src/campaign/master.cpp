@@ -556,8 +556,15 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m) {
     }
     if (reassigned_[item.index]) digest_[item.index] = store::physics_digest(r);
     ++report_.stored;
+    // What it computed: the engine's particle-steps (the stored result carries them as its wall
+    // time over its ns per particle-step), in the cost units of expected_seconds.
+    const auto& dg = r.diagnostics;
+    const double particle_steps = dg.particle_steps > 0 ? dg.particle_steps
+                                  : dg.ns_per_particle_step > 0
+                                      ? dg.wall_seconds * 1e9 / dg.ns_per_particle_step
+                                      : -1.0;
     eta_.finished(t.expected_seconds, seconds, 1, true,
-                  r.diagnostics.particle_steps * slow_seconds_per_particle_step);
+                  particle_steps > 0 ? particle_steps * slow_seconds_per_particle_step : -1.0);
     if (r.status == engine::Status::failed) {
         ++report_.failed;
         ++failed_now_;

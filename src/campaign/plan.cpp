@@ -317,20 +317,33 @@ CostEstimate estimate_cost(const engine::SceneParams& p) {
             : 1.0;
     e.flow_rate = beverloo_C * packing_fraction / area * std::sqrt(p.gravity) *
                   std::pow(free_width, 1.5) * f_theta;
-    const double flow_time = N / e.flow_rate;
     const double jam_rate = jam_rate_A * std::exp(-jam_rate_B * free_width / d);
-    e.jams = flow_time * jam_rate;
-    e.jammed_time = e.jams * c.t_check;
-    e.shake_time = e.jams * shakes_per_jam * p.protocol.shake_period;
-    const double to_empty = flow_time + e.jammed_time;
-    e.discharge_time = std::min(p.protocol.max_time, to_empty);
-    // Mobile particles fall from N to 0 at a steady rate while it flows (N/2 on average); a
-    // discharge cut by max_time keeps the rest. Shaking happens about half way, on average.
-    const double share = e.discharge_time / to_empty;  // of the discharge that happens
-    const double mobile_discharge = N * (1 - share / 2);
-    e.particle_steps = (N * e.settle_time + mobile_discharge * e.discharge_time +
-                        N * (1 - share / 2) * e.shake_time * share) /
-                       c.dt;
+    const auto& pr = p.protocol;
+    // What is mobile on average: the published protocol empties the hopper at a steady rate
+    // (N/2 on average over the emptying; a discharge cut by max_time keeps the rest); the
+    // steady state puts every particle back (N throughout).
+    double mobile = N;
+    if (pr.mode == engine::ProtocolMode::steady_state) {
+        // Until jams_per_realization jams (each after 1 / jam_rate of flow), or max_time.
+        const double per_jam = 1 / jam_rate + c.t_check;
+        const double until =
+            pr.jams_per_realization > 0 ? pr.jams_per_realization * per_jam : pr.max_time;
+        e.discharge_time = std::min(pr.max_time, until);
+        e.jams = e.discharge_time / per_jam;
+        e.jammed_time = e.jams * c.t_check;
+    } else {
+        const double flow_time = N / e.flow_rate;
+        e.jams = flow_time * jam_rate;
+        e.jammed_time = e.jams * c.t_check;
+        const double to_empty = flow_time + e.jammed_time;
+        e.discharge_time = std::min(pr.max_time, to_empty);
+        const double share = e.discharge_time / to_empty;  // of the emptying that happens
+        e.jams *= share;
+        e.jammed_time *= share;
+        mobile = N * (1 - share / 2);
+    }
+    e.shake_time = e.jams * shakes_per_jam * pr.shake_period;
+    e.particle_steps = (N * e.settle_time + mobile * (e.discharge_time + e.shake_time)) / c.dt;
     e.seconds = e.particle_steps * prior_seconds_per_particle_step *
                 std::pow(N / speed_particles, speed_exponent);
     return e;

@@ -262,6 +262,28 @@ TEST(CostModel, FullSizeTermsByHand) {
     EXPECT_NEAR(e.seconds, 519.0, 0.3 * 519.0);
 }
 
+// The steady state puts every particle back: all N stay mobile until the
+// jams_per_realization-th jam (each after 1 / jam_rate of flow and t_check to be seen).
+TEST(CostModel, SteadyStateKeepsEveryParticleMobileUntilItsJams) {
+    engine::SceneParams p;
+    p.particles.count = 700;
+    p.hopper.width = 0.2;
+    p.hopper.outlet = 0.027;
+    p.protocol.mode = engine::ProtocolMode::steady_state;
+    p.protocol.jams_per_realization = 10;
+    const CostEstimate e = estimate_cost(p);
+    EXPECT_NEAR(e.jams, 10.0, 1e-9);
+    const auto c = engine::derive_constants(p);
+    EXPECT_NEAR(e.jammed_time, 10 * c.t_check, 1e-12);
+    EXPECT_NEAR(e.shake_time, 10 * 1.15 * p.protocol.shake_period, 1e-12);
+    EXPECT_NEAR(
+        e.particle_steps / ((700 * e.settle_time + 700 * (e.discharge_time + e.shake_time)) / c.dt),
+        1.0, 1e-12);
+    p.protocol.max_time = e.discharge_time / 2;  // the time limit comes first
+    EXPECT_NEAR(estimate_cost(p).discharge_time, e.discharge_time / 2, 1e-12);
+    EXPECT_NEAR(estimate_cost(p).jams, 5.0, 1e-9);
+}
+
 // The quickstart as measured with `campaign run campaigns/quickstart.toml --threads 2`
 // (docs/performance.md, "The cost model"): 48 realizations, 3.516e9 particle-steps in all, 94.4 s
 // of CPU time. The estimate is within 30 % of both.

@@ -50,7 +50,8 @@ struct CostEstimate {
     double jams = 0.0;            // expected jams over the discharge
     double jammed_time = 0.0;     // s of discharge time spent jammed (until each jam is seen)
     double shake_time = 0.0;      // s simulated while shaking
-    double discharge_time = 0.0;  // s of discharge time: to empty, or protocol.max_time
+    double discharge_time = 0.0;  // s of discharge time: to empty (the steady state: to its
+                                  // jams_per_realization-th jam), at most protocol.max_time
     double particle_steps = 0.0;  // the cost: mobile particles summed over the time steps
     double seconds = 0.0;         // particle_steps at the prior speed for N particles
 };
