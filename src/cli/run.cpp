@@ -104,8 +104,12 @@ void print_run_help(std::ostream& os) {
           "finished is stored and the exit code is 4; the same command resumes. A stopped\n"
           "realization's state is saved in STORE.checkpoints/ (also every --checkpoint-interval\n"
           "seconds) and continues from there, bit-identical, in the next run.\n\n"
+          "Before anything runs, settings in the wrong unit are refused (an outlet narrower than\n"
+          "a disk, a packing taller than 20 hopper widths, contacts too soft for its weight); 3\n"
+          "realizations of one point failing alike before the outlet opens stop the run.\n\n"
           "exit codes: 0 all stored, 2 bad sweep file or refused store, 1 store or I/O error,\n"
-          "            3 finished with failed realizations, 4 stopped by a signal (resumable)\n\n"
+          "            3 finished with failed realizations (or stopped early by identical\n"
+          "            failures), 4 stopped by a signal (resumable)\n\n"
        << run_options();
 }
 
