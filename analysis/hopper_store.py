@@ -21,16 +21,26 @@ them (60, not 59.99999999999999). Seeds are uint64; `seed_str` repeats each as t
 digits), which R's read.csv and spreadsheets keep exact where they would round a number above
 2^53.
 
-Reading needs Debian's python3-h5py, -numpy and -pandas; fields() also python3-xarray. The store
-must not be written at the time (after `campaign run` has ended; `campaign status` works during).
+Reading needs Debian's python3-h5py, -numpy and -pandas; fields() also python3-xarray. While a
+`campaign run` writes the store (or after a run was killed, before the next one), open_store()
+reads a snapshot of it taken from its journal, which holds every realization stored at that
+moment (docs/store.md, "Reading a store during a run"): it runs `campaign export STORE
+--snapshot` with the executable named by $HOPPER_CAMPAIGN, else `campaign` on PATH, else the
+source tree's build/src/cli/campaign. The snapshot is removed by close().
 """
+import fcntl
 import math
+import os
+import shutil
+import struct
+import subprocess
+import tempfile
 
 import h5py
 import numpy as np
 import pandas as pd
 
-__all__ = ["open_store", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
+__all__ = ["open_store", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
 
 # Scene parameter -> (short symbol for legends, unit shown, factor from the stored SI value).
 # Parameters not listed are shown by their name and stored value.
@@ -167,6 +177,11 @@ class Store:
     def close(self):
         if self._f is not None:
             self._f.close()
+            self._f = None
+        snapshot = getattr(self, "_snapshot_dir", None)
+        if snapshot is not None:
+            snapshot.cleanup()
+            self._snapshot_dir = None
 
     def __enter__(self):
         return self
@@ -544,6 +559,66 @@ class Store:
         return out
 
 
+def writer_active(path):
+    """Whether a `campaign run` is writing the store: it holds a write lock on the journal (an
+    open-file-description lock, asked with F_OFD_GETLK; nothing is locked by asking)."""
+    journal = str(path) + ".journal"
+    try:
+        fd = os.open(journal, os.O_RDONLY)
+    except FileNotFoundError:
+        return False
+    try:
+        # struct flock: l_type, l_whence, l_start, l_len, l_pid (0 for OFD locks), padded.
+        query = struct.pack("hhqqi4x", fcntl.F_WRLCK, os.SEEK_SET, 0, 0, 0)
+        answer = fcntl.fcntl(fd, getattr(fcntl, "F_OFD_GETLK", 36), query)
+        return struct.unpack("hhqqi4x", answer)[0] != fcntl.F_UNLCK
+    finally:
+        os.close(fd)
+
+
+def _in_step(path):
+    """The HDF5 file was closed by its last writer (no run since): it holds the journal."""
+    try:
+        with h5py.File(str(path), "r") as f:
+            return int(f.attrs.get("consistent", 0)) == 1
+    except OSError:
+        return False
+
+
+def campaign_executable():
+    """The `campaign` executable that takes snapshots: $HOPPER_CAMPAIGN, `campaign` on PATH, or
+    the source tree's build/src/cli/campaign; None when there is none."""
+    given = os.environ.get("HOPPER_CAMPAIGN")
+    if given:
+        return given
+    found = shutil.which("campaign")
+    if found:
+        return found
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "build", "src",
+                        "cli", "campaign")
+    return os.path.normpath(here) if os.access(here, os.X_OK) else None
+
+
 def open_store(path):
-    """Opens a store for reading (see the module's help)."""
-    return Store(path)
+    """Opens a store for reading (see the module's help). During a run (or after a killed one,
+    before the next run repairs the file) it reads a snapshot of the journal instead of the
+    HDF5 file, which the writer holds and which lags behind the journal."""
+    path = str(path)
+    if not os.path.exists(path + ".journal") or (not writer_active(path) and _in_step(path)):
+        return Store(path)
+    exe = campaign_executable()
+    if exe is None:
+        raise OSError("'%s' is being written by a `campaign run` (or its last run was "
+                      "interrupted): reading it then needs the `campaign` executable to take a "
+                      "snapshot of its journal; set HOPPER_CAMPAIGN or put it on PATH" % path)
+    tmp = tempfile.TemporaryDirectory(prefix="hopper-view-")
+    view = os.path.join(tmp.name, os.path.basename(path))
+    done = subprocess.run([exe, "export", path, "--snapshot", view], capture_output=True,
+                          text=True)
+    if done.returncode != 0:
+        tmp.cleanup()
+        raise OSError("cannot take a snapshot of '%s': %s" % (path, done.stderr.strip()))
+    s = Store(view)
+    s.path = path
+    s._snapshot_dir = tmp
+    return s

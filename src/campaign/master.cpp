@@ -3,13 +3,16 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <map>
 #include <set>
 
 #include <unistd.h>
 
+#include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/running.hpp"
 #include "hopper/core/error.hpp"
@@ -98,6 +101,7 @@ class Dispatcher {
                     std::span<const std::uint8_t> state);
     void update_running();
     void print_progress();
+    void check_fail_fast(const TaskRef& t, const engine::RealizationResult& r);
     void send_stop_now();
     Clock::duration silence_limit(const Item& item) const;
     double correction() const;
@@ -131,9 +135,9 @@ class Dispatcher {
     Clock::duration interval_;
     Clock::time_point next_progress_;
     int failed_now_;
-    // ETA weighted by the cost model, corrected by the worker seconds measured so far. The cost
-    // model's expected_seconds assume a pessimistic 100 ns per particle-step; 0.5 of that is the
-    // prior until a realization has finished.
+    // ETA weighted by the cost model (TaskRef::expected_seconds: particle-steps at the slow
+    // speed of plan.hpp), at the speed measured on what finished realizations computed; the
+    // prior speed until one has finished. Running realizations count with what they have left.
     CostEta eta_;
     bool costs_known_ = true;
 
@@ -146,6 +150,8 @@ class Dispatcher {
     const bool timed_;
     bool told_unmeasured_ = false;
     std::set<std::size_t> hopeless_;  // tasks warned about: longer than the allocation
+    // Failures before the outlet opened, per point label and message shape (fail fast).
+    std::map<std::pair<std::string, std::string>, int> early_failures_;
     // Seconds this run may compute: from its start to the deadline minus the grace.
     double allocation_ = 1e300;
 };
@@ -167,7 +173,7 @@ Dispatcher::Dispatcher(MasterChannel& channel, store::Store& store, const StopRe
       interval_(to_duration(progress_ ? options.progress_interval : 1e9)),
       next_progress_(start_ + interval_),
       failed_now_(totals.failed),
-      eta_(channel.workers(), 0.5),
+      eta_(channel.workers(), prior_seconds_per_particle_step / slow_seconds_per_particle_step),
       ckpt_(options.checkpoints),
       measured_seconds_(options.measured_seconds),
       measured_expected_(options.measured_expected),
@@ -196,10 +202,11 @@ MasterReport Dispatcher::run() {
             (stop_.level() == StopLevel::now || Clock::now() >= drain_deadline_))
             stop_running();
         if (dispatch_tasks()) update_running();
-        if (timed_ && !draining_ && busy_.empty() && !queue_.empty()) end_when_nothing_fits();
+        if (timed_ && !draining_ && report_.fail_fast.empty() && busy_.empty() && !queue_.empty())
+            end_when_nothing_fits();
         if (timed_ && !draining_ && !busy_.empty() && seconds_to_deadline() <= options_.grace)
             stop_at_deadline();
-        if (busy_.empty() && (queue_.empty() || draining_)) break;
+        if (busy_.empty() && (queue_.empty() || draining_ || !report_.fail_fast.empty())) break;
         receive(wait_time());
         check_silence();
         if (progress_ && Clock::now() >= next_progress_) {
@@ -247,7 +254,7 @@ void Dispatcher::stop_running() {
 // Hands queued tasks to idle workers; returns whether any was handed out.
 bool Dispatcher::dispatch_tasks() {
     bool dispatched = false;
-    while (!draining_ && !idle_.empty() && !queue_.empty()) {
+    while (!draining_ && report_.fail_fast.empty() && !idle_.empty() && !queue_.empty()) {
         const auto pick = pick_task();
         if (pick == queue_.end()) break;
         const Item item = *pick;
@@ -578,10 +585,19 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
     }
     if (reassigned_[item.index]) digest_[item.index] = store::physics_digest(r);
     ++report_.stored;
-    eta_.finished(t.expected_seconds, seconds);
+    // What it computed: the engine's particle-steps (the stored result carries them as its wall
+    // time over its ns per particle-step), in the cost units of expected_seconds.
+    const auto& dg = r.diagnostics;
+    const double particle_steps = dg.particle_steps > 0 ? dg.particle_steps
+                                  : dg.ns_per_particle_step > 0
+                                      ? dg.wall_seconds * 1e9 / dg.ns_per_particle_step
+                                      : -1.0;
+    eta_.finished(t.expected_seconds, seconds, 1, true,
+                  particle_steps > 0 ? particle_steps * slow_seconds_per_particle_step : -1.0);
     if (r.status == engine::Status::failed) {
         ++report_.failed;
         ++failed_now_;
+        check_fail_fast(t, r);
     }
 }
 
@@ -594,6 +610,34 @@ void Dispatcher::restart_without_checkpoint(const Item& item, const std::string&
          << (draining_ ? "starts from its beginning on resume" : "starts again from its beginning")
          << std::endl;
     if (!draining_) queue_.push_front({item.index, item.attempt + 1});
+}
+
+// A failure before the outlet opened (while filling or settling) that repeats, numbers aside,
+// in fail_fast_after realizations of one point comes from the scene, not from a seed: running
+// the rest of the campaign would only repeat it. No more tasks are handed out; running ones
+// finish.
+void Dispatcher::check_fail_fast(const TaskRef& t, const engine::RealizationResult& r) {
+    if (options_.fail_fast_after <= 0 || !report_.fail_fast.empty()) return;
+    if (r.diagnostics.steps > r.diagnostics.settle_steps) return;  // the outlet had opened
+    std::string shape;  // the message with every number replaced by '#'
+    for (std::size_t i = 0; i < r.message.size(); ++i) {
+        const char ch = r.message[i];
+        if (std::isdigit(static_cast<unsigned char>(ch))) {
+            while (i + 1 < r.message.size() &&
+                   (std::isdigit(static_cast<unsigned char>(r.message[i + 1])) ||
+                    std::strchr(".e-+", r.message[i + 1])))
+                ++i;
+            shape += '#';
+        } else {
+            shape += ch;
+        }
+    }
+    if (++early_failures_[{t.label, shape}] < options_.fail_fast_after) return;
+    report_.fail_fast = std::to_string(options_.fail_fast_after) + " realizations of '" + t.label +
+                        "' failed the same way before the outlet opened (the last: #" +
+                        std::to_string(t.realization) + ", " + r.message + ")";
+    log_ << "campaign: failing fast: " << report_.fail_fast << "; handing out no more tasks"
+         << (busy_.empty() ? "" : " (running ones finish)") << std::endl;
 }
 
 // An attempt that raised: logged in the store, retried once more unless draining or out of
@@ -653,9 +697,14 @@ void Dispatcher::update_running() {
 void Dispatcher::print_progress() {
     const double elapsed = seconds_since(start_);
     const double rate = elapsed > 0 ? report_.stored / elapsed : 0.0;
+    std::vector<RunningCost> running;
+    const double now = store::unix_now();
+    for (const auto& [w, b] : busy_)
+        running.push_back({todo_[b.item.index].expected_seconds,
+                           b.base_seconds + std::max(0.0, now - b.started_unix)});
     log_ << progress_line(totals_.finished + report_.stored, totals_.total,
                           static_cast<int>(busy_.size()), failed_now_, rate, elapsed,
-                          costs_known_ ? eta_.seconds_left() : -1.0)
+                          costs_known_ ? eta_.seconds_left(running) : -1.0)
          << std::endl;
 }
 

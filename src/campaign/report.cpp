@@ -44,10 +44,12 @@ void CostEta::add_pending(double cost, int tasks) {
     pending_cost_ += cost * tasks;
 }
 
-void CostEta::finished(double cost, double worker_seconds, int tasks, bool was_pending) {
+void CostEta::finished(double cost, double worker_seconds, int tasks, bool was_pending,
+                       double done_cost) {
     if (was_pending) pending_cost_ = std::max(0.0, pending_cost_ - cost * tasks);
-    if (cost > 0 && worker_seconds > 0) {
-        cost_done_ += cost * tasks;
+    const double computed = done_cost >= 0 ? done_cost : cost * tasks;
+    if (computed > 0 && worker_seconds > 0) {
+        cost_done_ += computed;
         seconds_done_ += worker_seconds;
     }
 }
@@ -56,8 +58,17 @@ double CostEta::seconds_per_cost() const {
     return cost_done_ > 0 ? seconds_done_ / cost_done_ : prior_;
 }
 
-double CostEta::seconds_left() const {
-    return pending_cost_ * seconds_per_cost() / workers_;
+double CostEta::seconds_left(const std::vector<RunningCost>& running) const {
+    const double speed = seconds_per_cost();
+    double queued = pending_cost_, running_left = 0.0, longest = 0.0;
+    for (const auto& r : running) {
+        queued -= r.cost;
+        const double expected = r.cost * speed;
+        const double left = std::max(expected - r.elapsed, expected / 20);
+        running_left += left;
+        longest = std::max(longest, left);
+    }
+    return std::max((std::max(0.0, queued) * speed + running_left) / workers_, longest);
 }
 
 void write_summary(std::ostream& out, const store::StoreStatus& status,

@@ -40,10 +40,10 @@ std::string compiler_id() {
 namespace {
 
 // Seconds a realization is expected to take, from the cost model (particle-steps) at a
-// pessimistic 100 ns per particle-step (measured: 35-50 ns on one core, README "Performance").
-// Only the default silence limit of a worker depends on it.
+// pessimistic speed (plan.hpp). The default silence limit of a worker depends on it; the
+// progress line's ETA and the deadline's estimates scale it by what was measured.
 double expected_seconds(double particle_steps) {
-    return 100e-9 * particle_steps;
+    return slow_seconds_per_particle_step * particle_steps;
 }
 
 WorkerOptions worker_options(const RunOptions& opt) {
@@ -164,6 +164,10 @@ MasterReport run_rounds(Master& master, const Campaign& c, const fs::path& store
         if (r.stopped) {
             all.stopped = true;
             all.stop_reason = r.stop_reason;
+            break;
+        }
+        if (!r.fail_fast.empty()) {
+            all.fail_fast = r.fail_fast;
             break;
         }
         if (r.gave_up > 0 || r.stored == 0) {
@@ -315,8 +319,9 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 
-    const std::string reason =
-        rep.stopped ? "interrupted by " + rep.stop_reason : std::string("complete");
+    const std::string reason = rep.stopped              ? "interrupted by " + rep.stop_reason
+                               : !rep.fail_fast.empty() ? "stopped early: " + rep.fail_fast
+                                                        : std::string("complete");
     st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
                                    rep.cpu_seconds, rep.lost_worker_seconds,
                                    rep.saved_worker_seconds});
@@ -346,8 +351,11 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         err << "campaign: " << rep.reassigned << " realization(s) were handed to another worker "
             << "after their worker went silent; late results: " << rep.late_identical
             << " identical, " << rep.late_different << " different" << std::endl;
-    const std::string resume = "campaign run " + c.sweep.path.string() +
-                               (opt.store ? " --store " + opt.store->string() : std::string());
+    const std::string resume =
+        !opt.resume_command.empty()
+            ? opt.resume_command
+            : "campaign run " + c.sweep.path.string() +
+                  (opt.store ? " --store " + opt.store->string() : std::string());
     if (rep.interrupted > 0 || rep.resumed > 0)
         err << "campaign: worker time of interrupted realizations: "
             << format_duration(rep.saved_worker_seconds) << " kept in checkpoints, "
@@ -358,6 +366,14 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             << " realization(s) not stored yet (" << rep.interrupted
             << " interrupted). Resume with:\n  " << resume << std::endl;
         return run_stopped;
+    }
+    if (!rep.fail_fast.empty()) {
+        err << "campaign: stopped early: " << rep.fail_fast
+            << ". The scene fails, not a seed: " << left
+            << " realization(s) were not run. Fix the sweep file (the message names "
+            << "what fails; check the units of its settings) and run it on another --store"
+            << std::endl;
+        return run_with_failures;
     }
     if (failed > 0) {
         err << "campaign: finished with " << failed
@@ -377,7 +393,7 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
 
 }  // namespace
 
-int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
+int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunTotals* totals) {
     const Campaign c = load(opt);
     const auto& spec = c.sweep.campaign;
     const fs::path store_path = opt.store ? *opt.store : spec.store;
@@ -394,16 +410,19 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     }
     // Measured worker seconds per particle-step over the stored realizations of these points.
     double measured_s = 0.0, measured_cost = 0.0;
-    std::vector<double> cost(spec.points.size());
+    std::vector<double> cost(spec.points.size()), prior(spec.points.size());
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
-        cost[p] = expected_cost(spec.points[p].scene);
+        const CostEstimate e = estimate_cost(spec.points[p].scene);
+        cost[p] = e.particle_steps;
+        prior[p] = e.seconds;
         for (const auto& ps : status.points)
             if (ps.label == spec.points[p].label && ps.timed > 0) {
                 measured_s += ps.task_seconds;
                 measured_cost += ps.timed * cost[p];
             }
     }
-    const double per_cost = measured_cost > 0 ? measured_s / measured_cost : 50e-9;
+    const bool measured = measured_cost > 0;
+    const double per_cost = measured ? measured_s / measured_cost : 0.0;
     out << "dry run: " << c.sweep.path.string() << " on " << store_path.string()
         << (existing ? "" : " (new)") << "; nothing is run or written\n";
     char line[512];
@@ -428,10 +447,11 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
             c.tasks.begin(), c.tasks.end(),
             [&](const config::Task& t) { return static_cast<std::size_t>(t.point_index) == p; }));
         const int to_run = planned - stored;
-        const double each = cost[p] * per_cost;
+        const double each = measured ? cost[p] * per_cost : prior[p];
         const double hours = to_run * each / 3600.0;
         total_h += hours;
         total_runs += to_run;
+        if (totals && to_run > 0) totals->longest_seconds = std::max(totals->longest_seconds, each);
         std::snprintf(line, sizeof line, "%-40s %9d %7d %7d %12.1f %11.3f\n",
                       pt.label.substr(0, 40).c_str(), pt.scene.particles.count, stored, to_run,
                       each, hours);
@@ -440,11 +460,20 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     std::snprintf(line, sizeof line, "%-40s %9s %7s %7d %12s %11.3f\n", "total", "", "", total_runs,
                   "", total_h);
     out << line;
-    out << "basis: cost model (particles x steps to settle and empty at the 2-D Beverloo rate) x "
-        << per_cost * 1e9 << " ns per particle-step ("
-        << (measured_cost > 0 ? "measured on the store's realizations of these points"
-                              : "the prior: nothing measured yet")
-        << "); core-hours count worker time only (the master sleeps)\n";
+    if (totals) {
+        totals->worker_seconds = total_h * 3600.0;
+        totals->realizations = total_runs;
+    }
+    out << "basis: cost model (mobile particles x time steps: settling the packing, emptying it "
+           "at the 2-D Beverloo rate of the outlet and wall angle, jams and shakes; "
+           "docs/performance.md) x ";
+    if (measured)
+        out << per_cost * 1e9
+            << " ns per particle-step (measured on the store's realizations of these points)";
+    else
+        out << "the engine's speed measured on one core (" << prior_seconds_per_particle_step * 1e9
+            << " ns per particle-step at 8750 particles, less for smaller systems)";
+    out << "; core-hours count worker time only (the master sleeps)\n";
     const int workers = std::max(1, opt.threads);
     out << "on " << workers << " worker" << (workers == 1 ? "" : "s") << ": about "
         << format_duration(total_h * 3600.0 / workers) << " of wall time if the load balances\n";

@@ -10,6 +10,8 @@
 #include "cli/simulate.hpp"
 #include "hopper/analysis/store_analysis.hpp"
 #include "hopper/core/error.hpp"
+#include "hopper/store/journal.hpp"
+#include "hopper/store/store.hpp"
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -191,6 +193,15 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
             code = exit_error;
         }
     if (!write) return code;
+    // The tables above come from the journal, so they hold every realization stored so far;
+    // the run writes /analysis itself when it ends.
+    if (store::journal_locked(store::journal_path(store))) {
+        err << "campaign: note: /analysis not written: a `campaign run` is writing the store "
+               "(the tables above are the realizations stored so far; the run writes /analysis "
+               "when it ends)"
+            << std::endl;
+        return code;
+    }
     try {
         analysis::write_analysis_group(store, result);
     } catch (const core::StoreError& e) {
@@ -221,11 +232,12 @@ void print_analyze_help(std::ostream& os) {
           "goodness of fit; early/late jam rates; empty times; flow rates in particles per\n"
           "second and kg/s) and across points (Beverloo fit per group, jam rate 1/tau versus\n"
           "D), printed as tables or one JSON object, and written into the store's /analysis\n"
-          "group (replacing the previous one). Reads the journal; refuses to write while a\n"
-          "`campaign run` holds the store. Figures: campaign plot STORE.h5\n\n"
-          "exit codes: 0 analyzed (and written), 1 no store, or /analysis could not be written\n"
-          "            (a run holds the store, or the HDF5 file is not in step; the tables are\n"
-          "            printed anyway), 2 bad command line\n\n"
+          "group (replacing the previous one). Reads the journal, so it works while a\n"
+          "`campaign run` writes the store (every realization stored so far; /analysis is\n"
+          "then left to the run, which writes it at its end). Figures: campaign plot STORE.h5\n\n"
+          "exit codes: 0 analyzed (and written unless a run is writing the store), 1 no store,\n"
+          "            or /analysis could not be written (the HDF5 file is not in step; the\n"
+          "            tables are printed anyway), 2 bad command line\n\n"
        << analyze_options();
 }
 

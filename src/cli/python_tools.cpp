@@ -2,6 +2,7 @@
 
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <boost/program_options.hpp>
 #include <cerrno>
@@ -12,7 +13,10 @@
 #include <system_error>
 
 #include "cli/parse.hpp"
+#include "hopper/analysis/store_analysis.hpp"
 #include "hopper/core/error.hpp"
+#include "hopper/store/journal.hpp"
+#include "hopper/store/store.hpp"
 
 #ifndef HOPPER_ANALYSIS_DIR
 #define HOPPER_ANALYSIS_DIR "analysis"
@@ -48,6 +52,9 @@ po::options_description export_options() {
         ("csv", po::value<std::string>()->value_name("DIR"), "one CSV file per table into DIR")  //
         ("vtk", po::value<std::string>()->value_name("DIR"),
          "the merged field maps as VTK image data (.vti, ParaView) into DIR")  //
+        ("snapshot", po::value<std::string>()->value_name("FILE"),
+         "the store as it stands, also while a run writes it: FILE and FILE.journal, a closed "
+         "store of its own (hopper_store.open_store uses it during a run)")  //
         ("help,h", "show this help");
     return d;
 }
@@ -58,6 +65,46 @@ std::string existing_store(const po::variables_map& vm) {
     if (!fs::exists(store, ec)) throw core::ConfigError("no store at '" + store + "'");
     return store;
 }
+
+// What the Python tools read: the store itself when no run writes it and its HDF5 file is in
+// step with the journal; otherwise a snapshot of it (store::write_snapshot) in a directory of
+// its own, removed when this goes away (docs/store.md, "Reading a store during a run").
+class ReaderView {
+  public:
+    ReaderView(const std::string& store, bool with_analysis) : path_(store) {
+        if (!fs::exists(store::journal_path(store))) return;  // a file without its journal
+        const store::StoreStatus st = store::read_status(store);
+        if (!st.writer_active && st.hdf5_in_step) return;
+        static int counter = 0;
+        dir_ = fs::temp_directory_path() /
+               ("hopper-view-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+        path_ = (dir_ / fs::path(store).filename()).string();
+        const store::Snapshot snap = store::write_snapshot(store, path_);
+        std::cerr << "campaign: note: "
+                  << (snap.writer_active ? "a `campaign run` is writing '" + store + "'"
+                                         : "the HDF5 file '" + store +
+                                               "' is not in step with its journal (a run was "
+                                               "interrupted)")
+                  << "; reading the " << snap.realizations
+                  << " realization(s) its journal holds now (a snapshot; the store is not "
+                     "touched)"
+                  << std::endl;
+        if (with_analysis) analysis::write_analysis_group(path_, analysis::analyze_store(path_));
+    }
+    ~ReaderView() {
+        std::error_code ec;
+        if (!dir_.empty()) fs::remove_all(dir_, ec);
+    }
+    ReaderView(const ReaderView&) = delete;
+    ReaderView& operator=(const ReaderView&) = delete;
+    const std::string& path() const { return path_; }
+
+  private:
+    std::string path_;
+    fs::path dir_;
+};
 
 }  // namespace
 
@@ -139,18 +186,22 @@ void print_plot_help(std::ostream& os) {
           "outlet per group with their exponential fits, tau and the jam rate versus D, flow\n"
           "rate and empty time versus D with Beverloo, k versus theta, particles in the hopper,\n"
           "jam onsets, and the field maps. Legends name only the settings that vary. Runs\n"
-          "analysis/plots.py with /usr/bin/python3 (python3-matplotlib, -pandas, -h5py).\n\n"
+          "analysis/plots.py with /usr/bin/python3 (python3-matplotlib, -pandas, -h5py).\n"
+          "While a `campaign run` writes the store: the realizations stored so far, from a\n"
+          "snapshot of its journal analyzed on the spot (the store is not touched).\n\n"
           "exit codes: 0 figures written, 2 bad arguments or a store without /analysis,\n"
           "            3 no realization to draw (every one failed), 1 other errors\n\n"
        << plot_options();
 }
 
 void print_export_help(std::ostream& os) {
-    os << "usage: campaign export STORE.h5 [--csv DIR] [--vtk DIR]\n\n"
+    os << "usage: campaign export STORE.h5 [--csv DIR] [--vtk DIR] | --snapshot FILE\n\n"
           "Writes the store's tables as CSV files (points with every setting, realizations,\n"
           "survival intervals as duration and event, events, discharge curves, jams, exits, and\n"
           "after the analysis its tables) and the field maps as VTK image data for ParaView.\n"
-          "In Python, analysis/hopper_store.py reads the same tables as pandas DataFrames.\n\n"
+          "In Python, analysis/hopper_store.py reads the same tables as pandas DataFrames.\n"
+          "While a `campaign run` writes the store, export, plot and open_store() read a\n"
+          "snapshot of its journal: every realization stored at that moment.\n\n"
           "exit codes: 0 written, 2 bad arguments or nothing to export, 1 other errors\n\n"
        << export_options();
 }
@@ -162,7 +213,8 @@ int plot_command(const std::vector<std::string>& args) {
         return 0;
     }
     const std::string store = existing_store(vm);
-    std::vector<std::string> py{store, "--out"};
+    const ReaderView view(store, true);
+    std::vector<std::string> py{view.path(), "--out"};
     if (vm.count("out")) {
         py.push_back(vm["out"].as<std::string>());
     } else {
@@ -192,9 +244,24 @@ int export_command(const std::vector<std::string>& args) {
         return 0;
     }
     const std::string store = existing_store(vm);
+    if (vm.count("snapshot")) {
+        if (vm.count("csv") || vm.count("vtk"))
+            throw core::ConfigError(
+                "--snapshot writes a store: give it alone, then export from "
+                "the snapshot");
+        const std::string& out = vm["snapshot"].as<std::string>();
+        if (out.empty()) throw core::ConfigError("--snapshot must not be empty");
+        const store::Snapshot snap = store::write_snapshot(store, out);
+        std::cout << "snapshot: " << out << " (" << snap.realizations << " realization(s)"
+                  << (snap.writer_active ? ", taken while a `campaign run` writes the store" : "")
+                  << ")\n";
+        return 0;
+    }
     if (!vm.count("csv") && !vm.count("vtk"))
-        throw core::ConfigError("nothing to export: give --csv DIR and/or --vtk DIR");
-    std::vector<std::string> py{store};
+        throw core::ConfigError(
+            "nothing to export: give --csv DIR and/or --vtk DIR (or --snapshot FILE)");
+    const ReaderView view(store, false);
+    std::vector<std::string> py{view.path()};
     for (const char* opt : {"csv", "vtk"})
         if (vm.count(opt)) {
             const std::string& dir = vm[opt].as<std::string>();

@@ -1,10 +1,13 @@
 #include "cli/run.hpp"
 #include "cli/parse.hpp"
 
+#include <algorithm>
 #include <boost/program_options.hpp>
+#include <cctype>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <thread>
 
@@ -102,11 +105,31 @@ void print_run_help(std::ostream& os) {
           "finished is stored and the exit code is 4; the same command resumes. A stopped\n"
           "realization's state is saved in STORE.checkpoints/ (also every --checkpoint-interval\n"
           "seconds) and continues from there, bit-identical, in the next run.\n\n"
+          "Before anything runs, settings in the wrong unit are refused (an outlet narrower than\n"
+          "a disk, a packing taller than 20 hopper widths, contacts too soft for its weight); 3\n"
+          "realizations of one point failing alike before the outlet opens stop the run.\n\n"
           "exit codes: 0 all stored, 2 bad sweep file or refused store, 1 store or I/O error,\n"
-          "            3 finished with failed realizations, 4 stopped by a signal (resumable),\n"
-          "            5 every realization stored but the analysis not written (disk full?)\n\n"
+          "            3 finished with failed realizations (or stopped early by identical\n"
+          "            failures), 4 stopped by a signal (resumable), 5 every realization\n"
+          "            stored but the analysis not written (disk full?)\n\n"
        << run_options();
 }
+
+namespace {
+
+// `word` as one shell word: as it is when it is plain, else in single quotes.
+std::string shell_quoted(const std::string& word) {
+    const bool plain = !word.empty() && std::all_of(word.begin(), word.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || std::strchr("-_./=:,+@%", ch);
+    });
+    if (plain) return word;
+    std::string out = "'";
+    for (char ch : word)
+        out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return out + "'";
+}
+
+}  // namespace
 
 int run_command(const std::vector<std::string>& args, const std::string& command_line) {
     const po::variables_map vm = parse_command(args, run_options(), "sweep");
@@ -212,6 +235,9 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     }
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;
+    opt.resume_command = "campaign run";
+    for (const auto& a : args)
+        opt.resume_command += " " + shell_quoted(a);
     // At the end of a run that was not stopped: the same analysis as `campaign analyze`.
     // Figures at the end unless --no-plots (or HOPPER_PLOTS=0, which the test suite sets so
     // that its many small runs do not each start Python).

@@ -89,18 +89,25 @@ ProgressEstimate estimate_progress(const store::StoreStatus& s, double now_unix)
     for (const auto& [label, c] : cost)
         known += c;
     const double mean_cost = cost.empty() ? 0.0 : known / static_cast<double>(cost.size());
-    campaign::CostEta eta(e.workers);
+    campaign::CostEta eta(e.workers, campaign::prior_seconds_per_particle_step);
     int pending = 0;
+    auto cost_of = [&](const std::string& label) {
+        const auto it = cost.find(label);
+        return it != cost.end() ? it->second : mean_cost;
+    };
     for (const auto& p : s.points) {
-        const auto it = cost.find(p.label);
-        const double c = it != cost.end() ? it->second : mean_cost;
+        const double c = cost_of(p.label);
         eta.add_pending(c, p.pending);
         eta.finished(c, p.task_seconds, p.timed, false);
         pending += p.pending;
     }
+    // The realizations running now (the running file) count with what they have left.
+    std::vector<campaign::RunningCost> running;
+    for (const auto& t : running_tasks(s))
+        running.push_back({cost_of(t.label), std::max(0.0, now_unix - t.start_unix)});
     e.basis = eta.measured() ? "cost model, scaled to the worker time of the stored realizations"
-                             : "cost model at 50 ns per particle-step (nothing measured yet)";
-    if (pending > 0 && eta.seconds_left() > 0) e.eta_seconds = eta.seconds_left();
+                             : "cost model at 35 ns per particle-step (nothing measured yet)";
+    if (pending > 0 && eta.seconds_left(running) > 0) e.eta_seconds = eta.seconds_left(running);
     if (s.writer_active && !last.end) {
         for (int rank = 1; rank <= e.workers; ++rank) {
             const auto it = last.last_result_unix.find(rank);

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <boost/program_options.hpp>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +18,7 @@
 
 #include "cli/options.hpp"
 #include "cli/simulate.hpp"
+#include "hopper/campaign/report.hpp"
 #include "hopper/campaign/run.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
@@ -519,8 +521,17 @@ int submit_command(const std::vector<std::string>& args) {
                                  : (master_slot == "shared" ? ntasks : ntasks - 1) * threads;
         ro.threads = static_cast<int>(std::max(1L, workers));
         std::ostringstream est;
-        campaign::dry_run(ro, est, std::cerr);
+        campaign::DryRunTotals totals;
+        campaign::dry_run(ro, est, std::cerr, &totals);
         std::cerr << est.str();
+        const Chain chain{1 + max_resubmits,
+                          limit,
+                          lead,
+                          std::max(1L, workers),
+                          ntasks,
+                          launcher == "none" ? 1 : threads,
+                          launcher != "none" && master_slot == "own"};
+        std::cerr << chain_warning(chain, totals.worker_seconds, totals.longest_seconds);
         return 0;
     }
     const fs::path sbatch = on_path("sbatch");
@@ -549,6 +560,53 @@ int submit_command(const std::vector<std::string>& args) {
               << "          tail -f " << log.string() << "\n"
               << "          campaign status " << store.string() << "\n";
     return 0;
+}
+
+namespace {
+
+// "1:05:00", "2-04:00:00" (Slurm's --time), rounded up to whole minutes.
+std::string slurm_time(double seconds) {
+    const long minutes = static_cast<long>(std::ceil(seconds / 60.0));
+    char buf[64];
+    if (minutes >= 24 * 60)
+        std::snprintf(buf, sizeof buf, "%ld-%02ld:%02ld:00", minutes / 1440, minutes % 1440 / 60,
+                      minutes % 60);
+    else
+        std::snprintf(buf, sizeof buf, "%ld:%02ld:00", minutes / 60, minutes % 60);
+    return buf;
+}
+
+}  // namespace
+
+std::string chain_warning(const Chain& c, double worker_seconds, double longest_s) {
+    constexpr double spare = 1.2;  // the load balance: the last realizations leave workers idle
+    const double usable = static_cast<double>(std::max(1L, c.time_s - c.lead_s));
+    const double capacity = static_cast<double>(c.allocations) * usable * c.workers;
+    std::ostringstream w;
+    if (worker_seconds * spare > capacity) {
+        const double need = worker_seconds * spare;
+        // More workers at the same --time: whole ranks of `threads` workers (+ the master's).
+        const double workers = std::ceil(need / (c.allocations * usable));
+        const long ranks =
+            static_cast<long>(std::ceil(workers / c.threads)) + (c.own_master ? 1 : 0);
+        // A longer --time at the same --ntasks.
+        const double time = need / (static_cast<double>(c.allocations) * c.workers) + c.lead_s;
+        w << "campaign: warning: the chain cannot finish the estimate: " << c.allocations
+          << " allocation(s) x " << slurm_time(static_cast<double>(c.time_s)) << " x " << c.workers
+          << " worker(s) hold " << campaign::format_duration(capacity)
+          << " of worker time, the estimate needs " << campaign::format_duration(worker_seconds)
+          << " (" << campaign::format_duration(need)
+          << " with 20 % for the load balance). Use --ntasks " << ranks
+          << " (same --time), or --time " << slurm_time(time) << " (same --ntasks), or "
+          << "more --max-resubmits; the chain stops at its last allocation with realizations "
+             "pending (the same command submits it again)\n";
+    }
+    if (longest_s > usable)
+        w << "campaign: note: one realization is expected to take "
+          << campaign::format_duration(longest_s) << ", longer than an allocation's "
+          << campaign::format_duration(usable)
+          << " of work: it finishes across allocations from its checkpoints (keep them on)\n";
+    return w.str();
 }
 
 }  // namespace hopper::cli

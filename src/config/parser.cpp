@@ -4,6 +4,7 @@
 #include <iterator>
 
 #include "config/parser.hpp"
+#include "hopper/config/sanity.hpp"
 #include "hopper/core/units.hpp"
 
 namespace hopper::config::detail {
@@ -289,6 +290,8 @@ SceneParams Parser::build_scene(const std::vector<Given>& overrides,
     } catch (const ConfigError& e) {
         fail(where + e.what());
     }
+    // Orders of magnitude (a value in the wrong unit passes the ranges above).
+    if (const std::string problem = scene_problem(p); !problem.empty()) fail(where + problem);
     return p;
 }
 

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <fstream>
 #include <random>
 #include <system_error>
 
@@ -73,6 +74,26 @@ struct RebuildSink : ReplaySink {
     void run_end(const State& s, const RunEndRecord&) override { w.run_end(s); }
 };
 
+// The HDF5 file `target` written from the journal's records before `limit` (truncates it), then
+// closed as in step with `token` and `journal_bytes` (the rebuild and the snapshot).
+void write_from_journal(const fs::path& jpath, std::uint64_t limit, const fs::path& target,
+                        const std::string& journal_name, std::uint64_t token,
+                        std::uint64_t journal_bytes) {
+    layout::Writer w = layout::Writer::create(target, journal_name);
+    State fresh;
+    RebuildSink sink(w);
+    scan_journal(jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+        if (off < limit) apply_record(fresh, t, off, p, &sink);
+    });
+    w.flush(fresh);
+    w.close(fresh, token, journal_bytes);
+}
+
+std::uint64_t random_token() {
+    std::random_device rd;
+    return (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ 1u;
+}
+
 }  // namespace
 
 struct Store::Impl {
@@ -104,17 +125,8 @@ struct Store::Impl {
         tmp += ".rebuild";
         std::error_code ec;
         fs::remove(tmp, ec);
-        {
-            layout::Writer w = layout::Writer::create(tmp, jpath.filename().string());
-            State fresh;
-            RebuildSink sink(w);
-            scan_journal(jpath,
-                         [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
-                             if (off < journal->size()) apply_record(fresh, t, off, p, &sink);
-                         });
-            w.flush(fresh);
-            w.close(fresh, 0, 0);  // consistent, but not a sync point (token 0)
-        }
+        // Consistent, but not a sync point (token 0).
+        write_from_journal(jpath, journal->size(), tmp, jpath.filename().string(), 0, 0);
         fsync_path(tmp);
         crash_point("rebuild");
         fs::rename(tmp, path);
@@ -341,8 +353,7 @@ void Store::end_run(const RunEndRecord& r) {
     if (!m.run_open) throw core::StoreError("internal: end_run() outside a run");
     m.journal->append(RecordType::run_end, encode(r));
     m.state.apply(r);
-    std::random_device rd;
-    const std::uint64_t token = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ 1u;
+    const std::uint64_t token = random_token();
     const std::uint64_t at = m.journal->size();
     m.update_view([&] {
         m.writer->run_end(m.state);
@@ -424,6 +435,54 @@ std::vector<StoredRealization> read_journal_realizations(const fs::path& store) 
                      apply_record(state, t, off, p, &sink);
                  });
     return out;
+}
+
+Snapshot write_snapshot(const fs::path& store, const fs::path& out) {
+    const h5::QuietErrors quiet;
+    const fs::path src = journal_path(store);
+    const fs::path dst = journal_path(out);
+    refuse_directory(store, "the store");
+    if (!exists_or_throw(src, "the store's journal"))
+        throw core::StoreError("no journal '" + src.string() + "' beside '" + store.string() +
+                               "': a snapshot is taken from the journal");
+    for (const fs::path& p : {out, dst})
+        if (exists_or_throw(p, "the snapshot"))
+            throw core::StoreError("'" + p.string() +
+                                   "' exists; a snapshot writes a new store (another path)");
+    Snapshot snap;
+    snap.writer_active = journal_locked(src);
+    std::error_code ec;
+    fs::create_directories(parent_or_dot(out), ec);
+    // The journal is append-only: its bytes up to the moment of reading never change. A record
+    // the writer is appending meanwhile is copied incomplete and dropped below as a torn tail.
+    {
+        std::ifstream in(src, std::ios::binary);
+        std::ofstream copy(dst, std::ios::binary | std::ios::trunc);
+        if (!in || !copy)
+            throw core::StoreError("cannot copy the journal '" + src.string() + "' to '" +
+                                   dst.string() + "'");
+        copy << in.rdbuf();
+        if (!copy.flush())
+            throw core::StoreError("cannot write the snapshot's journal '" + dst.string() + "'");
+    }
+    State state;
+    JournalScan scan;
+    Journal journal = Journal::open(
+        dst,
+        [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+            apply_record(state, t, off, p, nullptr);
+        },
+        scan, JournalOptions{.require_lock = false, .before_link = {}});
+    const std::uint64_t token = random_token();
+    const std::uint64_t at = journal.size();
+    write_from_journal(dst, at, out, dst.filename().string(), token, at);
+    fsync_path(out);
+    journal.append(
+        RecordType::sync,
+        encode(SyncRecord{token, at, static_cast<std::uint64_t>(state.rows), checksum_file(out)}));
+    snap.realizations = state.rows;
+    snap.journal_bytes = at;
+    return snap;
 }
 
 }  // namespace hopper::store

@@ -1,6 +1,7 @@
 #!/bin/bash
 # Signals: SIGTERM mid-run stops at once, stores what finished, says how to resume and exits 4;
-# SIGUSR1 drains; the rerun completes to the same results as an uninterrupted run.
+# SIGUSR1 drains; the rerun completes to the same results as an uninterrupted run. The resume
+# line repeats the command's arguments.
 # Usage: signals.sh NP (0 = without mpirun; under mpirun SIGUSR1 goes to mpirun, which forwards
 # it to every rank, and SIGTERM to every rank directly).
 NP=$1
@@ -8,7 +9,7 @@ source "$(dirname "$0")/lib.sh"
 reference
 STORE=$WORK/sig.h5
 if [ "$NP" -eq 0 ]; then
-    CMD=("$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30)
+    CMD=("$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30 --threads 2)
 else
     CMD=(mpirun -np "$NP" "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30)
 fi
@@ -27,6 +28,12 @@ rc=$?
 expect_in job.err "SIGTERM: handing out no more tasks"
 expect_in job.err "stopped by SIGTERM"
 expect_in job.err "Resume with:"
+# The resume line repeats the arguments given (issue 27: it dropped --threads).
+if [ "$NP" -eq 0 ]; then
+    expect_in job.err "  campaign run $MINI --store $STORE --progress-interval 0 --grace 30 --threads 2"
+else
+    expect_in job.err "  campaign run $MINI --store $STORE --progress-interval 0 --grace 30"
+fi
 "$EXE" status "$STORE" --json >term.json || fail "status after SIGTERM"
 "$PY" - term.json <<'PY' || fail "store after SIGTERM"
 import json, sys

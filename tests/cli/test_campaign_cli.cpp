@@ -183,6 +183,25 @@ TEST(CampaignCli, FailedRealizationExitsThree) {
     EXPECT_NE(r.out.find("\"status\": \"failed\""), std::string::npos) << r.out;
 }
 
+// Issue 27: `campaign submit --dry-run` estimated 241.7 core-hours for the survival study and
+// said nothing of its default chain's 22 worker-hours.
+TEST(CampaignCli, SubmitDryRunWarnsWhenTheChainCannotFinish) {
+    const fs::path survival = source_dir / "campaigns" / "paper" / "survival.toml";
+    const Outcome r =
+        campaign("submit " + quote(survival) + " --dry-run --store " + quote(scratch() / "s.h5"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("warning: the chain cannot finish the estimate: 11 allocation(s) x "
+                         "1:00:00 x 2 worker(s)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("Use --ntasks "), std::string::npos) << r.err;
+    // Enough ranks: no warning.
+    const Outcome ok = campaign("submit " + quote(survival) + " --dry-run --ntasks 64 --store " +
+                                quote(scratch() / "s.h5"));
+    ASSERT_EQ(ok.code, 0) << ok.err;
+    EXPECT_EQ(ok.err.find("warning: the chain"), std::string::npos) << ok.err;
+}
+
 struct BadLine {
     std::string args;
     std::vector<std::string> mentions;  // the message must name these

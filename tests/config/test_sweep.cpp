@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "hopper/config/sanity.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/core/units.hpp"
@@ -222,6 +223,51 @@ TEST(SweepParse, FieldKeysAreCheckedLikeEveryOther) {
 
 // Found by tests/fuzz: inputs that crashed the parser, overflowed derived constants or gave
 // unbounded messages are clean errors now.
+// Issue 27: values in the wrong unit pass every range check but fail every realization; they
+// are refused before a run, naming the key, the value and what would work.
+TEST(SweepSanity, AnOutletNarrowerThanOneDiskNamesTheKeyTheValueAndTheUnit) {
+    const std::string msg = error_of(
+        "[hopper]\nwidth_cm = 12\nparticles = 500\ntheta_deg = 60\n[campaign]\nname = \"u\"\n"
+        "[sweep]\nD_cm = [0.025, 2.5]\n");
+    EXPECT_THAT(msg, HasSubstr("D_cm = 0.025"));
+    EXPECT_THAT(msg, HasSubstr("narrower than one small disk (hopper.d_small_cm = 0.602)"));
+    EXPECT_THAT(msg, HasSubstr("D_cm is in centimetres"));
+    EXPECT_THAT(msg, HasSubstr("write D_cm = 2.5"));
+    // One small disk passes (the gap is the narrowest a disk can pass, however rarely).
+    EXPECT_NO_THROW(parse("[hopper]\nwidth_cm = 12\nparticles = 500\nD_cm = 0.61\n"));
+}
+
+TEST(SweepSanity, APackingTallerThanTwentyWidthsIsRefused) {
+    // 20000 disks in a 12 cm hopper: about 7 m of packing.
+    const std::string msg = error_of("[hopper]\nwidth_cm = 12\nparticles = 20000\nD_cm = 3\n");
+    EXPECT_THAT(msg, HasSubstr("hopper.particles = 20000"));
+    EXPECT_THAT(msg, HasSubstr("hopper.width_cm = 12"));
+    EXPECT_THAT(msg, HasSubstr("allowed up to 20 widths"));
+    // The published full-size hopper: 8750 disks in 43 cm, about 2 widths.
+    const SweepFile paper = parse("[hopper]\nwidth_cm = 43\nparticles = 8750\nD_cm = 2.7\n");
+    const double h = hopper::config::settled_fill_height(paper.base);
+    // m: by hand about 0.94 from the nominal outline (a funnel 20 cm high holding 460 cm^2,
+    // then 74 cm of column); the wall disks' half diameter inside that outline adds 7 cm.
+    EXPECT_GT(h, 0.9);
+    EXPECT_LT(h, 1.05);
+}
+
+TEST(SweepSanity, ContactsTooSoftForThePackingsOwnWeightAreRefused) {
+    const std::string msg = error_of(
+        "[hopper]\nwidth_cm = 12\nparticles = 500\nD_cm = 2.5\n[material]\n"
+        "collision_time_s = 0.8\n");
+    EXPECT_THAT(msg, HasSubstr("material.collision_time_s = 0.8"));
+    EXPECT_THAT(msg, HasSubstr("every realization would fail while settling"));
+    EXPECT_THAT(msg, HasSubstr("Collision times below about"));
+    // Hand check of the estimate, quickstart scene at the published tau_c = 8e-4 s: k_n = pi^2
+    // m_large / (2 tau_c^2) = 1149 N/m; a column min(H, W/2) = 6 cm of 0.77 cm disks (7.8
+    // layers) on two contacts: 7.8 x 1.49e-4 kg x 9.81 / 2 / 1149 = 4.96e-6 m.
+    const SweepFile q = parse(
+        "[hopper]\nwidth_cm = 12\nparticles = 500\nD_cm = 2.5\n[material]\n"
+        "collision_time_s = 8e-4\n");
+    EXPECT_NEAR(hopper::config::settled_overlap(q.base), 4.96e-6, 0.05e-6);
+}
+
 TEST(SweepParse, AbsurdInputsFoundByTheFuzzerAreCleanErrors) {
     std::string deep;
     for (int k = 0; k < 100000; ++k)

@@ -265,6 +265,51 @@ TEST(Store, StatusWorksWhileARunWrites) {
     EXPECT_TRUE(contains(message_of([&] { Store other(p); }), "in use by another"));
 }
 
+// Issue 27: readers during a run. A snapshot taken while a Store writes (its HDF5 file open,
+// the journal locked, the last record half written) is a closed store of its own holding every
+// realization the journal held; the writer goes on and ends as if nothing had happened.
+TEST(Store, ASnapshotWhileARunWritesHoldsEverythingStoredAndDisturbsNothing) {
+    const fs::path dir = scratch();
+    const fs::path p = dir / "s.h5";
+    Store s(p);
+    s.begin_run(run_record({A, B}));
+    s.append(result_record(A, 0, fabricated(0)));
+    s.append(result_record(B, 1, fabricated(1)));
+    // A record being appended: half of one more, as a reader may find it.
+    {
+        std::ofstream j(journal_path(p), std::ios::binary | std::ios::app);
+        const char half[8] = {'H', 'J', 'R', 'C', 2, 0, 0, 0};
+        j.write(half, sizeof half);
+    }
+    const Snapshot snap = write_snapshot(p, dir / "view" / "v.h5");
+    EXPECT_TRUE(snap.writer_active);
+    EXPECT_EQ(snap.realizations, 2);
+    const StoreStatus view = read_status(dir / "view" / "v.h5");
+    EXPECT_FALSE(view.writer_active);
+    EXPECT_TRUE(view.hdf5_in_step);
+    EXPECT_EQ(view.done, 2);
+    EXPECT_EQ(contents(read_realizations(dir / "view" / "v.h5")),
+              contents(read_journal_realizations(p)));
+    // A snapshot never overwrites anything.
+    EXPECT_TRUE(contains(message_of([&] { write_snapshot(p, dir / "view" / "v.h5"); }), "exists"));
+    EXPECT_TRUE(contains(message_of([&] { write_snapshot(p, p); }), "exists"));
+    // The writer was not disturbed (the half record above stands for one of its own appends
+    // in progress: taken back, since only the writer appends).
+    fs::resize_file(journal_path(p), fs::file_size(journal_path(p)) - 8);
+    s.append(result_record(A, 1, fabricated(2)));
+    s.end_run(RunEndRecord{utc_now(), "complete", 3, 1.0, 0.01});
+    EXPECT_EQ(read_realizations(p).size(), 3u);
+    EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
+    // The snapshot kept the moment it was taken.
+    EXPECT_EQ(read_realizations(dir / "view" / "v.h5").size(), 2u);
+}
+
+TEST(Store, ASnapshotNeedsTheJournal) {
+    const fs::path dir = scratch();
+    EXPECT_TRUE(
+        contains(message_of([&] { write_snapshot(dir / "none.h5", dir / "v.h5"); }), "no journal"));
+}
+
 TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     const fs::path p = scratch() / "s.h5";
     {

@@ -43,6 +43,10 @@ struct MasterOptions {
     double progress_interval = 10.0;  // s of wall time between progress lines; 0 = none
     double grace = 60.0;              // s running tasks may take to finish after a drain request
     int max_attempts = 2;             // attempts per task and run when attempts raise exceptions
+    // Fail fast: after this many realizations of one point failed the same way before their
+    // outlet opened (the same message, numbers aside), no more tasks are handed out: the
+    // scene itself fails (a setting in the wrong unit), not a seed. 0: never.
+    int fail_fast_after = 3;
     std::chrono::milliseconds max_wait{250};  // longest sleep between looks at stop requests
     // Seconds a busy worker may stay silent (no heartbeat, no reply) before its realization is
     // handed to another worker. Unset: worker_timeout_factor times the realization's expected
@@ -81,6 +85,9 @@ struct MasterReport {
     int silent_at_end = 0;   // workers still silent when the run ended
     bool stopped = false;
     std::string stop_reason;
+    // Set when the run stopped handing out tasks because of identical early failures
+    // (MasterOptions::fail_fast_after): what failed, and how.
+    std::string fail_fast;
     double wall_seconds = 0.0;
     double cpu_seconds = 0.0;  // CPU time of the master's thread
     // Worker seconds of interrupted realizations that no checkpoint keeps (they are computed

@@ -40,9 +40,32 @@ store::CampaignPlan read_plan(const std::filesystem::path& store);
 std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
                                           const store::CampaignPlan& sweep);
 
-// Relative cost of one realization, to hand out the longest first: particles x steps per
-// simulated second x an estimate of the simulated time (settling plus the time to empty the
-// hopper at the 2-D Beverloo rate, capped by max_time). Only the order matters.
+// The cost model (docs/performance.md, "The cost model"): what one realization of a scene is
+// expected to compute, calibrated on measured realizations of this engine. Each term is an
+// estimate of what the realization reports in its diagnostics.
+struct CostEstimate {
+    double fill_height = 0.0;     // m, the settled packing (config::settled_fill_height)
+    double settle_time = 0.0;     // s simulated while the packing settles
+    double flow_rate = 0.0;       // particles/s while it flows (2-D Beverloo with the wall angle)
+    double jams = 0.0;            // expected jams over the discharge
+    double jammed_time = 0.0;     // s of discharge time spent jammed (until each jam is seen)
+    double shake_time = 0.0;      // s simulated while shaking
+    double discharge_time = 0.0;  // s of discharge time: to empty (the steady state: to its
+                                  // jams_per_realization-th jam), at most protocol.max_time
+    double particle_steps = 0.0;  // the cost: mobile particles summed over the time steps
+    double seconds = 0.0;         // particle_steps at the prior speed for N particles
+};
+CostEstimate estimate_cost(const engine::SceneParams& p);
+
+// The engine's speed before anything of a campaign is measured: 35 ns per particle-step, one
+// full-size realization on one core (docs/performance.md); estimate_cost scales it to smaller
+// systems.
+inline constexpr double prior_seconds_per_particle_step = 35e-9;
+// A pessimistic speed, for limits that must not fire early (a worker's silence).
+inline constexpr double slow_seconds_per_particle_step = 100e-9;
+
+// The expected cost of one realization in particle-steps (estimate_cost): hands out the
+// longest first, and scales by measured worker seconds into times.
 double expected_cost(const engine::SceneParams& p);
 
 }  // namespace hopper::campaign

@@ -17,21 +17,36 @@ std::string format_duration(double seconds);
 std::string progress_line(int done, int total, int running, int failed, double rate, double elapsed,
                           double eta_seconds = -1.0);
 
-// The time left, weighted by the cost model: the pending tasks' expected costs (expected_cost in
-// plan.hpp: particle-steps) times the measured worker seconds per cost unit of the tasks finished
-// so far, divided by the workers. Before any task has finished, `prior_seconds_per_cost` (50 ns
-// per particle-step, docs/performance.md), so there is an estimate from the start; unlike a
-// count of realizations it does not mislead when the most expensive tasks run first.
-// `campaign status` uses it; the master's progress line can (report each result to finished()).
+// A realization being computed, for CostEta::seconds_left: its expected cost and the worker
+// seconds it has run (those of the checkpoint it continued from included).
+struct RunningCost {
+    double cost = 0.0;
+    double elapsed = 0.0;
+};
+
+// The time left, weighted by the cost model: the queued tasks' expected costs (expected_cost in
+// plan.hpp: particle-steps, or a multiple of them) times the measured worker seconds per cost
+// unit, plus each running task's expected cost less what it has run, over the workers. Before
+// any task has finished, `prior_seconds_per_cost` (the cost model's prior, plan.hpp), so there
+// is an estimate from the start; unlike a count of realizations it does not mislead when the
+// most expensive tasks run first. The speed is measured on what finished tasks actually
+// computed (`done_cost`: the engine's particle-steps) when it is known, so realizations that
+// ended early (arrested after a few jams) do not make the others look cheap.
+// `campaign status` and the master's progress line use it.
 class CostEta {
   public:
-    explicit CostEta(int workers, double prior_seconds_per_cost = 50e-9);
+    explicit CostEta(int workers, double prior_seconds_per_cost);
     void add_pending(double cost, int tasks = 1);
-    // `tasks` tasks of `cost` each finished (removed from the pending cost if they were added),
-    // taking `worker_seconds` of worker time in all.
-    void finished(double cost, double worker_seconds, int tasks = 1, bool was_pending = true);
+    // `tasks` tasks of expected cost `cost` each finished (removed from the pending cost if they
+    // were added), taking `worker_seconds` of worker time in all; `done_cost` is the cost they
+    // computed (the same units), < 0 when unknown (then their expected cost counts).
+    void finished(double cost, double worker_seconds, int tasks = 1, bool was_pending = true,
+                  double done_cost = -1.0);
     double seconds_per_cost() const;
-    double seconds_left() const;  // 0 when nothing is pending
+    // 0 when nothing is pending. `running` are pending tasks being computed: each counts with
+    // its expected seconds less those it has run (at least a twentieth of them: it has not
+    // ended), and the time left is never below the longest of these remainders.
+    double seconds_left(const std::vector<RunningCost>& running = {}) const;
     bool measured() const { return cost_done_ > 0; }
 
   private:

@@ -46,6 +46,9 @@ struct RunOptions {
     std::function<std::optional<double>(std::ostream& err)> deadline;
     std::string code_version = "unknown";
     std::string command_line;
+    // The command that resumes this run, printed when a signal stops it: the same arguments,
+    // shell-quoted. Empty: the sweep file and --store only.
+    std::string resume_command;
     // One realization (default: engine::run_realization(scene, task.seed, hooks)). Benchmarks
     // and tests replace it.
     std::function<engine::RealizationResult(const config::Task&, const engine::SceneParams&,
@@ -65,9 +68,17 @@ int run_campaign(const RunOptions& options, std::ostream& out, std::ostream& err
 // `campaign run --dry-run`: the realizations the sweep would run on its store (none is
 // started, the store is not opened for writing) and their estimated cost per point and in all,
 // from the cost model (expected_cost) at the worker seconds per particle-step measured on the
-// store's stored realizations, or at 50 ns per particle-step when nothing is measured yet.
+// store's stored realizations, or at the prior speed (plan.hpp) when nothing is measured yet.
 // Throws like run_campaign when the sweep cannot run on the store. Returns 0.
-int dry_run(const RunOptions& options, std::ostream& out, std::ostream& err);
+// What a dry run estimated: the worker seconds of everything still to run, and of its longest
+// realization.
+struct DryRunTotals {
+    double worker_seconds = 0.0;
+    double longest_seconds = 0.0;
+    int realizations = 0;
+};
+int dry_run(const RunOptions& options, std::ostream& out, std::ostream& err,
+            DryRunTotals* totals = nullptr);
 
 // The compiler that built this code ("gcc 12.2.0"), for provenance.
 std::string compiler_id();

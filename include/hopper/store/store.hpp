@@ -11,7 +11,8 @@
 // counted as done and never leaves a corrupt store behind once `campaign run` has run again.
 //
 // Only the master writes (Store). Readers use read_status() (the journal, without locks: it works
-// while a run is writing) or read_realizations() (the HDF5 file, for analysis).
+// while a run is writing), write_snapshot() (a closed copy of the store as it stands, also while
+// a run writes it) or read_realizations() (the HDF5 file, for analysis).
 
 #include <cstdint>
 #include <filesystem>
@@ -128,6 +129,18 @@ struct StoredRealization {
 std::vector<StoredRealization> read_realizations(const std::filesystem::path& store);
 // From the journal (same order).
 std::vector<StoredRealization> read_journal_realizations(const std::filesystem::path& store);
+
+// A reader's view of a store as it stands (docs/store.md, "Reading a store during a run"): the
+// journal's complete records copied to `out`'s journal and the HDF5 file `out` written from them
+// and closed in step, a store of its own that `campaign export`, `plot`, `analyze` and
+// hopper_store.py open like any other. Reads the store without locks and writes nothing beside
+// it, so a `campaign run` writing it is not disturbed. `out` and its journal must not exist.
+struct Snapshot {
+    std::int64_t realizations = 0;    // stored realizations the view holds
+    std::uint64_t journal_bytes = 0;  // the journal's length it was taken at
+    bool writer_active = false;       // a `campaign run` held the store when it was taken
+};
+Snapshot write_snapshot(const std::filesystem::path& store, const std::filesystem::path& out);
 
 struct StoreOptions {
     // Seconds between HDF5 flushes while running (0: after every result). The journal is
