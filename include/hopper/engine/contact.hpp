@@ -126,9 +126,51 @@ struct ViscousFrictionLaw {
                                                    Vec2& /*xi*/, double dt);
 };
 
-// Cundall-Strack static friction: a tangential spring xi that starts at zero length when the
+// The Cundall-Strack tangential spring of a contact whose normal force is fn (docs/model.md,
+// tangential force), shared by the spring laws: a spring xi that starts at zero length when the
 // contact forms, is projected onto the current tangent line, grows by v_t dt per step, and is
-// shortened when the Coulomb cap is active (docs/model.md, tangential force).
+// shortened when the Coulomb cap is active. k_t: its stiffness; gm: the tangential dashpot's
+// coefficient (gamma_t mbar, N s/m).
+template <bool Select>
+HOPPER_HOT_INLINE ContactOutput tangential_spring(const ContactParams& p, const ContactInput& c,
+                                                  double v_n, double fn, double k_t, double gm,
+                                                  double& hx, double& hy) {
+    const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
+    // The spring's own tangential velocity (equal to v_t unless corrected).
+    const double s_n = c.sx * c.nx + c.sy * c.ny;
+    const double stx = c.sx - s_n * c.nx, sty = c.sy - s_n * c.ny;
+    // xi' = xi - n (n . xi), then grow by v_t dt
+    const double n_xi = c.nx * hx + c.ny * hy;
+    double xx = (hx - c.nx * n_xi) + stx * c.dt_spring;
+    double xy = (hy - c.ny * n_xi) + sty * c.dt_spring;
+    // F_t* = -k_t xi' - gamma_t mbar v_t
+    const double dx = gm * vtx, dy = gm * vty;
+    const double mk = -k_t;
+    double ftx = mk * xx - dx, fty = mk * xy - dy;
+    const double cap = p.mu * std::abs(fn);  // mu |F_n|
+    const double ft2 = ftx * ftx + fty * fty;
+    // Sliding: F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
+    // xi' = -(F_t + gamma_t mbar v_t) / k_t (spring_only: xi' = -F_t / k_t).
+    const bool slip = ft2 > cap * cap;
+    if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
+        const double scale = cap / std::sqrt(ft2);
+        const double sfx = ftx * scale, sfy = fty * scale;
+        // spring_only as a factor on the dashpot: an invariant select on a bool keeps GCC
+        // from vectorizing the loops over pairs. 0 * d changes at most the sign of a zero.
+        const double keep = p.slip_spring_only ? 0.0 : 1.0;
+        const double rx = -(sfx + keep * dx);
+        const double ry = -(sfy + keep * dy);
+        xx = slip ? rx / k_t : xx;
+        xy = slip ? ry / k_t : xy;
+        ftx = slip ? sfx : ftx;
+        fty = slip ? sfy : fty;
+    }
+    hx = xx;
+    hy = xy;
+    return {fn, ftx, fty};
+}
+
+// Cundall-Strack static friction with the linear normal force (tangential_spring above).
 struct SpringFrictionLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
@@ -137,40 +179,7 @@ struct SpringFrictionLaw {
                                                     double& hx, double& hy) {
         const double v_n = c.vx * c.nx + c.vy * c.ny;
         const double fn = normal_magnitude(p, c.mbar, c.overlap, v_n);
-        const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
-        // The spring's own tangential velocity (equal to v_t unless corrected).
-        const double s_n = c.sx * c.nx + c.sy * c.ny;
-        const double stx = c.sx - s_n * c.nx, sty = c.sy - s_n * c.ny;
-        // xi' = xi - n (n . xi), then grow by v_t dt
-        const double n_xi = c.nx * hx + c.ny * hy;
-        double xx = (hx - c.nx * n_xi) + stx * c.dt_spring;
-        double xy = (hy - c.ny * n_xi) + sty * c.dt_spring;
-        // F_t* = -k_t xi' - gamma_t mbar v_t
-        const double gm = p.gamma_t * c.mbar;
-        const double dx = gm * vtx, dy = gm * vty;
-        const double mk = -p.k_t;
-        double ftx = mk * xx - dx, fty = mk * xy - dy;
-        const double cap = p.mu * std::abs(fn);  // mu |F_n|
-        const double ft2 = ftx * ftx + fty * fty;
-        // Sliding: F_t = mu |F_n| F_t*/|F_t*|, and the spring shortened to match:
-        // xi' = -(F_t + gamma_t mbar v_t) / k_t (spring_only: xi' = -F_t / k_t).
-        const bool slip = ft2 > cap * cap;
-        if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
-            const double scale = cap / std::sqrt(ft2);
-            const double sfx = ftx * scale, sfy = fty * scale;
-            // spring_only as a factor on the dashpot: an invariant select on a bool keeps GCC
-            // from vectorizing the loops over pairs. 0 * d changes at most the sign of a zero.
-            const double keep = p.slip_spring_only ? 0.0 : 1.0;
-            const double rx = -(sfx + keep * dx);
-            const double ry = -(sfy + keep * dy);
-            xx = slip ? rx / p.k_t : xx;
-            xy = slip ? ry / p.k_t : xy;
-            ftx = slip ? sfx : ftx;
-            fty = slip ? sfy : fty;
-        }
-        hx = xx;
-        hy = xy;
-        return {fn, ftx, fty};
+        return tangential_spring<Select>(p, c, v_n, fn, p.k_t, p.gamma_t * c.mbar, hx, hy);
     }
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
                                                    const Vec2& n, double overlap, const Vec2& v_ij,
@@ -196,33 +205,8 @@ struct HertzSpringLaw {
         const double eta = p.hertz_alpha * std::sqrt(c.mbar * K) * qx;  // kg/s
         const double v_n = c.vx * c.nx + c.vy * c.ny;
         const double fn = K * c.overlap * sx - eta * v_n;
-        const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
-        const double s_n = c.sx * c.nx + c.sy * c.ny;
-        const double stx = c.sx - s_n * c.nx, sty = c.sy - s_n * c.ny;
-        const double n_xi = c.nx * hx + c.ny * hy;
-        double xx = (hx - c.nx * n_xi) + stx * c.dt_spring;
-        double xy = (hy - c.ny * n_xi) + sty * c.dt_spring;
         const double kt = p.hertz_kt_ratio * 1.5 * K * sx;
-        const double gm = p.hertz_gt_ratio * eta;
-        const double dx = gm * vtx, dy = gm * vty;
-        double ftx = -kt * xx - dx, fty = -kt * xy - dy;
-        const double cap = p.mu * std::abs(fn);
-        const double ft2 = ftx * ftx + fty * fty;
-        const bool slip = ft2 > cap * cap;
-        if (Select || slip) {
-            const double scale = cap / std::sqrt(ft2);
-            const double sfx = ftx * scale, sfy = fty * scale;
-            const double keep = p.slip_spring_only ? 0.0 : 1.0;
-            const double rx = -(sfx + keep * dx);
-            const double ry = -(sfy + keep * dy);
-            xx = slip ? rx / kt : xx;
-            xy = slip ? ry / kt : xy;
-            ftx = slip ? sfx : ftx;
-            fty = slip ? sfy : fty;
-        }
-        hx = xx;
-        hy = xy;
-        return {fn, ftx, fty};
+        return tangential_spring<Select>(p, c, v_n, fn, kt, p.hertz_gt_ratio * eta, hx, hy);
     }
 };
 
