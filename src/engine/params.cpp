@@ -43,7 +43,8 @@ std::string to_string(NormalLaw l) {
 
 double hertz_restitution(double alpha) {
     // RK4 from first contact (xi = 0, xi' = 1) until xi is back at 0; the crossing is located by
-    // linear interpolation between the two steps that bracket it.
+    // linear interpolation between the two steps that bracket it. A collision so damped that it
+    // has not ended within 200 time units (the undamped one lasts 3.2) counts as no rebound.
     const auto acc = [alpha](double x, double v) {
         const double xp = x > 0.0 ? x : 0.0;
         return -xp * std::sqrt(xp) - alpha * std::sqrt(std::sqrt(xp)) * v;
@@ -61,7 +62,6 @@ double hertz_restitution(double alpha) {
             const double f = x / (x - xn);
             return -(v + f * (vn - v));
         }
-        if (vn > 0.0 && k > 10 && vn < 1e-12 && xn < 1e-12) return 0.0;  // stuck: no rebound
         x = xn;
         v = vn;
     }
