@@ -1,6 +1,8 @@
 #!/usr/bin/python3
 """Writes campaigns/paper-calibrated/*.toml from campaigns/paper/*.toml, and
-campaigns/calibration/{targets,beverloo}-calibrated.toml from their -spec twins (issue 11).
+campaigns/calibration/{targets,beverloo}-calibrated.toml from their -spec twins (issue 11), and
+campaigns/calibration/flow-curve-<candidate>.toml from flow-curve-spec.toml, one per candidate of
+the flow-curve recalibration (CANDIDATES below; issue 24).
 
 usage: /usr/bin/python3 campaigns/paper-calibrated/generate.py
 
@@ -40,11 +42,35 @@ PROTOCOL = {
 }
 
 
+# The flow curve per candidate (issue 24; docs/calibration.md, "The flow curve per candidate"):
+# candidate -> its modelling choices. "calibrated" is the shipped model; the others move the two
+# levers the sensitivity study found (the walls' roughness, the wall end's height above the
+# outlet corner) together: rougher walls slow the discharge at every outlet by about the same
+# factor, a wider free gap speeds it up most at the smallest outlets, which flattens the curve.
+CANDIDATES = {
+    "calibrated": CALIBRATED,
+    "rough-wide": {
+        "walls": [
+            ("spacing", "1.0", "rough walls: touching wall disks (the specification's default)"),
+            ("edge_offset", "0.5",
+             "the walls' rounded lower ends sit half a wall diameter up the wall"),
+        ],
+    },
+    "medium-wide": {
+        "walls": [
+            ("spacing", "0.75", "walls of medium roughness: wall disks overlapping by a quarter"),
+            ("edge_offset", "0.35",
+             "the walls' rounded lower ends sit 0.35 wall diameters up the wall"),
+        ],
+    },
+}
+
+
 def mark(section):
     return "calibrated" if section in CALIBRATED else "unjamming"
 
 
-def calibrate(text, name, source="campaigns/paper", choices=CALIBRATED):
+def calibrate(text, name, source="campaigns/paper", choices=CALIBRATED, suffix="-calibrated"):
     lines = text.split("\n")
     header = [
         "# CALIBRATED VARIANT (issue 11; written by campaigns/paper-calibrated/generate.py from",
@@ -75,7 +101,7 @@ def calibrate(text, name, source="campaigns/paper", choices=CALIBRATED):
         extra += "\n"
     if extra:
         text = text.replace("\n[campaign]\n", "\n" + extra + "[campaign]\n", 1)
-    text = re.sub(r'(\nname = ")([^"]+)(")', lambda m: m.group(1) + m.group(2) + "-calibrated" +
+    text = re.sub(r'(\nname = ")([^"]+)(")', lambda m: m.group(1) + m.group(2) + suffix +
                   m.group(3), text, count=1)
     return text
 
@@ -95,6 +121,15 @@ def main():
         with open(os.path.join(CALIBRATION, stem + "-calibrated.toml"), "w") as fh:
             fh.write(calibrate(text, stem + "-spec.toml", "campaigns/calibration"))
         print("wrote campaigns/calibration/%s-calibrated.toml" % stem)
+    with open(os.path.join(CALIBRATION, "flow-curve-spec.toml")) as fh:
+        text = fh.read()
+    for candidate, choices in CANDIDATES.items():
+        out = calibrate(text, "flow-curve-spec.toml", "campaigns/calibration", choices,
+                        "-" + candidate)
+        with open(os.path.join(CALIBRATION, "flow-curve-%s.toml" % candidate), "w") as fh:
+            fh.write(out.replace("# CALIBRATED VARIANT (issue 11;",
+                                 "# CANDIDATE '%s' (issue 24;" % candidate, 1))
+        print("wrote campaigns/calibration/flow-curve-%s.toml" % candidate)
 
 
 if __name__ == "__main__":
