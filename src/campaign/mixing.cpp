@@ -47,6 +47,15 @@ std::set<std::string> told_apart(const std::map<std::string, std::string>& a,
     return told;
 }
 
+// A point stored before setting `k` existed has no value for it and ran with its default (new
+// settings keep the earlier physics at their defaults): absent there and the default here is
+// the same physics.
+bool same_as_default(const std::string& a, const std::string& b, const std::string& k) {
+    if (a != "absent" && b != "absent") return false;
+    const auto d = config::default_parameter(k);
+    return d && config::value_text(*d) == (a == "absent" ? b : a);
+}
+
 }  // namespace
 
 std::vector<MixedSetting> mixed_settings(const store::CampaignPlan& stored,
@@ -71,7 +80,7 @@ std::vector<MixedSetting> mixed_settings(const store::CampaignPlan& stored,
             for (const auto& k : names) {
                 if (k == "D_cm") continue;  // D is in every label
                 const std::string a = value_or_absent(mine, k), b = value_or_absent(theirs, k);
-                if (a == b) continue;
+                if (a == b || same_as_default(a, b, k)) continue;
                 bool is_told = false;
                 for (const auto& s : told)
                     is_told = is_told || explains(s, k);

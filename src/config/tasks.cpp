@@ -91,6 +91,16 @@ std::vector<std::string> parameter_names() {
     return out;
 }
 
+std::optional<core::Setting> default_parameter(std::string_view name) {
+    static const engine::SceneParams defaults{};
+    for (const auto& d : key_table())
+        if (d.name == name) {
+            if (auto v = d.read(defaults)) return core::Setting{std::string(name), std::move(*v)};
+            return std::nullopt;
+        }
+    return std::nullopt;
+}
+
 std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<core::Setting>& settings,
                           int realization) {
     if (realization < 0)

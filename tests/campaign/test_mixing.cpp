@@ -66,6 +66,29 @@ TEST(Mixing, AnUnvariedSettingThatDiffersIsFound) {
         << text;
 }
 
+TEST(Mixing, ASettingNewerThanTheStoreIsFineAtItsDefault) {
+    // Points stored before material.mu_r and protocol.unjam existed have no value for them and
+    // ran with their defaults (no rolling resistance, shaking): a new point at the defaults is
+    // the same physics (before: "material.mu_r = 0 in this sweep, absent in the store").
+    const auto stored = plan({point(label(2, 60), base_at(2))});
+    Settings same = base_at(3);
+    same.push_back({"material.mu_r", 0.0});
+    same.push_back({"protocol.unjam", std::string("shake")});
+    EXPECT_TRUE(mixed_settings(stored, plan({point(label(3, 60), same)})).empty());
+    // ... and one away from a default is found
+    Settings other = base_at(3);
+    other.push_back({"material.mu_r", 0.1});
+    other.push_back({"protocol.unjam", std::string("remove_arch")});
+    const auto m = mixed_settings(stored, plan({point(label(3, 60), other)}));
+    ASSERT_EQ(m.size(), 2u);
+    EXPECT_EQ(m[0].name, "material.mu_r");
+    EXPECT_EQ(m[0].store_values, std::vector<std::string>{"absent"});
+    EXPECT_EQ(m[1].name, "protocol.unjam");
+    ASSERT_TRUE(config::default_parameter("material.mu_r").has_value());
+    EXPECT_EQ(config::value_text(*config::default_parameter("protocol.unjam")), "shake");
+    EXPECT_FALSE(config::default_parameter("no.such_key").has_value());
+}
+
 TEST(Mixing, DifferencesTheLabelsTellAreFine) {
     // a new wall angle, and a material setting that is in the labels (walls follow it)
     Settings with_mu = label(2, 60);

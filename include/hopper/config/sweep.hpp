@@ -112,4 +112,10 @@ std::string value_text(const core::Setting& setting);
 // "material.mu", ...). For documentation checks and command-line help.
 std::vector<std::string> parameter_names();
 
+// The value scene parameter `name` has when no sweep file sets it (the default scene), as a
+// point's `parameters` record it (file units); nullopt for an unset optional or an unknown name.
+// A point stored before a setting existed has no entry for it, and ran with this value: the
+// settings added since keep the earlier physics at their defaults (campaign/mixing.hpp).
+std::optional<core::Setting> default_parameter(std::string_view name);
+
 }  // namespace hopper::config
