@@ -3,7 +3,8 @@
 (issue 24, item 4): the Beverloo fit recovers A and k of rates made exactly from W = A (D - k d)^1.5;
 the targets table gives each published empty time's ratio for stores whose empty times are the
 published ones times a known factor; the sensitivity table gives each choice's rate change against
-the reference and the seed noise; bad arguments exit 2 with a message.
+the reference and the seed noise; the flow curves per candidate give each outlet's rate against the
+published mean rate and recover A, k and C phi; bad arguments exit 2 with a message.
 
 usage: test_calibration.py SOURCE_DIR     (exit 0 pass, 1 fail, 77 skipped: no h5py/scipy)
 """
@@ -123,6 +124,39 @@ check("reference: 3 seeds, 510.0 /s, seed-to-seed sd 10.0 /s = 2.0 %" in out,
       "sensitivity names the reference and its noise")
 check("| hopper.wall_spacing=0.5 | 561.0 | +10.0 % | +5.1 | -9.1 % |" in out,
       "sensitivity row of the choice: %s" % [l for l in out.splitlines() if "wall_spacing" in l])
+
+# --- Flow curves per candidate: "fast" has the published mean rates N / T_empty times 1.10 at the
+# eight published outlets (two seeds at 1.09 and 1.11 x); "bev" is the Beverloo store above
+# (A = 90, k = 1.2 recovered; d = 0.7 cm).
+pub = {2.7: 34.45, 2.9: 30.44, 3.1: 27.83, 3.3: 25.25, 3.5: 22.82, 4.1: 17.27, 4.3: 15.76,
+       4.5: 14.52}
+pts = []
+for i, (D, T) in enumerate(sorted(pub.items())):
+    pts.append(("D_cm=%g" % D, scene(**{"hopper.outlet_m": D / 100}),
+                [(i * 2 + 1, 8750 / T * 1.09, None), (i * 2 + 2, 8750 / T * 1.11, None)]))
+make_store(os.path.join(work, "fast.h5"), pts)
+rc, out, err = run("curves", "fast=" + os.path.join(work, "fast.h5"),
+                   "bev=" + os.path.join(work, "bev.h5"), "--out", work)
+check(rc == 0, "curves exits 0 (got %d: %s)" % (rc, err))
+for D, T in pub.items():
+    row = [l for l in out.splitlines() if l.startswith("| %g | %.1f |" % (D, 8750 / T))]
+    check(len(row) == 1 and "(+10.0 %) [2]" in row[0],
+          "curves row for D = %g: the candidate 10 %% above the published rate: %s" % (D, row))
+bev = [l for l in out.splitlines() if l.startswith("| bev |")]
+check(len(bev) == 1 and bev[0].startswith("| bev | 90.0 +- ") and "| 1.200 +- " in bev[0],
+      "curves recovers A = 90, k = 1.2 of the Beverloo store: %s" % bev)
+# C phi = A <a> / sqrt(g): <a> = pi/4 (0.6^2 + 0.8^2) / 2 cm^2
+cphi = 90 * math.pi / 4 * (0.36 + 0.64) / 2 / math.sqrt(981)
+check(len(bev) == 1 and ("| %.3f +- " % cphi) in bev[0], "curves gives C phi = %.3f" % cphi)
+check(os.path.exists(os.path.join(work, "flow_curves.png")) and
+      os.path.exists(os.path.join(work, "flow_curves.json")), "curves writes its figure and JSON")
+rc, out, err = run("curves", os.path.join(work, "fast.h5"))
+check(rc == 2 and "NAME=STORE.h5" in err, "curves without NAME= exits 2 (got %d: %s)" % (rc, err))
+pts60 = [(l, sc.replace("hopper.theta_rad=%r" % (math.pi / 4), "hopper.theta_rad=%r" %
+                        (math.pi / 3)), rr) for l, sc, rr in pts]
+make_store(os.path.join(work, "sixty.h5"), pts60)
+rc, out, err = run("curves", "x=" + os.path.join(work, "sixty.h5"))
+check(rc == 2 and "theta = 60" in err, "curves at 60 deg exits 2 (got %d: %s)" % (rc, err))
 
 # --- Bad arguments: a file that is not a store.
 bad = os.path.join(work, "not_a_store.h5")
