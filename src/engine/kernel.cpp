@@ -273,97 +273,131 @@ struct KernelImpl final : System::Kernel {
 
     // The reference force pass: one loop over the neighbour list, each touching pair evaluated
     // where it is found. The batched paths must give exactly its bits (test_kernel_paths).
+    // Round 3 (docs/performance.md): every column and coefficient is read through a local
+    // (__restrict pointers, ContactParams by value), so that the stores of the partners' forces
+    // do not make the compiler reload them for every contact; the sums are the same.
     template <bool Corr>
     static detail::ForceSums reference(const detail::ForceArgs& a) {
         using detail::PairInput;
         using detail::PairOutput;
-        std::fill(a.fx, a.fx + a.n, 0.0);
-        std::fill(a.fy, a.fy + a.n, 0.0);
-        if constexpr (rot) std::fill(a.tq, a.tq + a.n, 0.0);
+        const int n = a.n;
+        const double* __restrict x = a.x;
+        const double* __restrict y = a.y;
+        const double* __restrict r = a.r;
+        const double* __restrict vx = a.vx;
+        const double* __restrict vy = a.vy;
+        const double* __restrict w = a.w;
+        const double* __restrict svx = a.svx;
+        const double* __restrict svy = a.svy;
+        const double* __restrict sw = a.sw;
+        double* __restrict fx = a.fx;
+        double* __restrict fy = a.fy;
+        double* __restrict tq = a.tq;
+        const int* __restrict ps = a.ps;
+        const int* __restrict pj = a.pj;
+        const int* __restrict ws = a.ws;
+        const int* __restrict wjs = a.wj;
+        double* __restrict hx = a.hx;
+        double* __restrict hy = a.hy;
+        double* __restrict gx = a.gx;
+        double* __restrict gy = a.gy;
+        const double* __restrict wx = a.wx;
+        const double* __restrict wy = a.wy;
+        const double* __restrict wr = a.wr;
+        const double* __restrict pmbar = a.pmbar;
+        const double* __restrict wmbar = a.wmbar;
+        const ContactParams pp = a.pp, pw = a.pw;
+        const double dt = a.dt, lever_half = a.lever_half;
+        const double ox = a.ox, oy = a.oy, vwx = a.vwx, vwy = a.vwy;
+        std::fill(fx, fx + n, 0.0);
+        std::fill(fy, fy + n, 0.0);
+        if constexpr (rot) std::fill(tq, tq + n, 0.0);
         double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
         double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
         int contacts = 0;
         PairInput q{};
-        for (int i = 0; i < a.n; ++i) {
-            const double xi = a.x[i], yi = a.y[i], ri = a.r[i];
-            q.vix = a.vx[i];
-            q.viy = a.vy[i];
-            q.wi = rot ? a.w[i] : 0.0;
+        for (int i = 0; i < n; ++i) {
+            const double xi = x[i], yi = y[i], ri = r[i];
+            q.vix = vx[i];
+            q.viy = vy[i];
+            q.wi = rot ? w[i] : 0.0;
             if constexpr (Corr) {  // the springs' own velocities: only with the corrections
-                q.six = a.svx[i];
-                q.siy = a.svy[i];
-                q.swi = rot ? a.sw[i] : 0.0;
+                q.six = svx[i];
+                q.siy = svy[i];
+                q.swi = rot ? sw[i] : 0.0;
             }
             q.ri = ri;
             double fxi = 0.0, fyi = 0.0, tqi = 0.0;
             // Mobile partners: each pair once, Newton's third law.
-            for (int k = a.ps[i]; k < a.ps[i + 1]; ++k) {
-                const int j = a.pj[k];
-                double& sx = hist ? a.hx[k] : no_spring_x;
-                double& sy = hist ? a.hy[k] : no_spring_y;
-                q.dx = xi - a.x[j];
-                q.dy = yi - a.y[j];
-                q.rj = a.r[j];
+            const int k1 = ps[i + 1];
+            for (int k = ps[i]; k < k1; ++k) {
+                const int j = pj[k];
+                double& sx = hist ? hx[k] : no_spring_x;
+                double& sy = hist ? hy[k] : no_spring_y;
+                q.dx = xi - x[j];
+                q.dy = yi - y[j];
+                q.rj = r[j];
                 q.rs = ri + q.rj;
                 q.d2 = q.dx * q.dx + q.dy * q.dy;
                 if (q.d2 >= q.rs * q.rs) {
                     sx = sy = 0.0;  // not touching: the spring is forgotten
                     continue;
                 }
-                q.mbar = a.pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
-                q.vjx = a.vx[j];
-                q.vjy = a.vy[j];
-                q.wj = rot ? a.w[j] : 0.0;
+                q.mbar = pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
+                q.vjx = vx[j];
+                q.vjy = vy[j];
+                q.wj = rot ? w[j] : 0.0;
                 if constexpr (Corr) {
-                    q.sjx = a.svx[j];
-                    q.sjy = a.svy[j];
-                    q.swj = rot ? a.sw[j] : 0.0;
+                    q.sjx = svx[j];
+                    q.sjy = svy[j];
+                    q.swj = rot ? sw[j] : 0.0;
                 }
                 const PairOutput o =
-                    detail::pair_force<Law, Corr, false>(a.pp, a.dt, a.lever_half, q, sx, sy);
+                    detail::pair_force<Law, Corr, false>(pp, dt, lever_half, q, sx, sy);
                 fxi += o.fx;
                 fyi += o.fy;
-                a.fx[j] -= o.fx;
-                a.fy[j] -= o.fy;
+                fx[j] -= o.fx;
+                fy[j] -= o.fy;
                 if constexpr (rot) {
-                    tqi -= o.ti;      // -l_i (n x F_t)
-                    a.tq[j] -= o.tj;  // -l_j (n x F_t): the same form for the partner
+                    tqi -= o.ti;    // -l_i (n x F_t)
+                    tq[j] -= o.tj;  // -l_j (n x F_t): the same form for the partner
                 }
-                max_ov = std::max(max_ov, o.overlap);
+                max_ov = o.overlap > max_ov ? o.overlap : max_ov;
                 ++contacts;
             }
             // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0.
             double wfxi = 0.0, wfyi = 0.0;
-            q.vjx = q.sjx = a.vwx;
-            q.vjy = q.sjy = a.vwy;
+            q.vjx = q.sjx = vwx;
+            q.vjy = q.sjy = vwy;
             q.wj = q.swj = 0.0;
-            for (int k = a.ws[i]; k < a.ws[i + 1]; ++k) {
-                const int j = a.wj[k];
-                double& sx = hist ? a.gx[k] : no_spring_x;
-                double& sy = hist ? a.gy[k] : no_spring_y;
-                q.dx = xi - (a.wx[j] + a.ox);
-                q.dy = yi - (a.wy[j] + a.oy);
-                q.rj = a.wr[j];
+            const int kw1 = ws[i + 1];
+            for (int k = ws[i]; k < kw1; ++k) {
+                const int j = wjs[k];
+                double& sx = hist ? gx[k] : no_spring_x;
+                double& sy = hist ? gy[k] : no_spring_y;
+                q.dx = xi - (wx[j] + ox);
+                q.dy = yi - (wy[j] + oy);
+                q.rj = wr[j];
                 q.rs = ri + q.rj;
                 q.d2 = q.dx * q.dx + q.dy * q.dy;
                 if (q.d2 >= q.rs * q.rs) {
                     sx = sy = 0.0;
                     continue;
                 }
-                q.mbar = a.wmbar[k];
+                q.mbar = wmbar[k];
                 const PairOutput o =
-                    detail::pair_force<Law, Corr, false>(a.pw, a.dt, a.lever_half, q, sx, sy);
+                    detail::pair_force<Law, Corr, false>(pw, dt, lever_half, q, sx, sy);
                 wfxi += o.fx;
                 wfyi += o.fy;
                 if constexpr (rot) tqi -= o.ti;
-                max_ov = std::max(max_ov, o.overlap);
+                max_ov = o.overlap > max_ov ? o.overlap : max_ov;
                 ++contacts;
             }
-            a.fx[i] += fxi + wfxi;
-            a.fy[i] += fyi + wfyi;
+            fx[i] += fxi + wfxi;
+            fy[i] += fyi + wfyi;
             wfx -= wfxi;
             wfy -= wfyi;
-            if constexpr (rot) a.tq[i] += tqi;
+            if constexpr (rot) tq[i] += tqi;
         }
         return {max_ov, wfx, wfy, contacts};
     }

@@ -64,11 +64,19 @@ HOPPER_HOT_INLINE PairOutput pair_force(const ContactParams& p, double dt, doubl
         relative_velocity(rot, q.six, q.siy, q.swi, q.sjx, q.sjy, q.swj, li, lj, nx, ny, sx, sy);
     double dts = dt;
     if constexpr (Corr && Law::has_history) {
+        // A new spring grows over min(dt, x / |s_n|), the estimated time in contact (round 3:
+        // one division, and in the scalar loop only for a new spring; the same value in every
+        // path: the select below evaluates the same expression).
         // Bitwise &, not &&: no control flow, so that the loops over pairs vectorize.
         const double s_n = sx * nx + sy * ny;  // < 0 while approaching
-        const double frac = overlap / (-s_n * dt);
         const bool fresh = (hx == 0.0) & (hy == 0.0) & (s_n < 0.0);
-        dts = fresh ? dt * (frac < 1.0 ? frac : 1.0) : dt;
+        if constexpr (Select) {
+            const double t_in = overlap / -s_n;
+            dts = fresh ? (t_in < dt ? t_in : dt) : dt;
+        } else if (fresh) {
+            const double t_in = overlap / -s_n;
+            dts = t_in < dt ? t_in : dt;
+        }
     }
     ContactInput c{nx, ny, overlap, mbar, vx, vy, sx, sy, dts};
     if constexpr (law_needs_rstar<Law>) c.rstar = q.ri * q.rj / (q.ri + q.rj);

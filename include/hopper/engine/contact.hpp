@@ -160,8 +160,11 @@ HOPPER_HOT_INLINE ContactOutput tangential_spring(const ContactParams& p, const 
         const double keep = p.slip_spring_only ? 0.0 : 1.0;
         const double rx = -(sfx + keep * dx);
         const double ry = -(sfy + keep * dy);
-        xx = slip ? rx / k_t : xx;
-        xy = slip ? ry / k_t : xy;
+        // Round 3 (docs/performance.md): one reciprocal, two products (loop-invariant for the
+        // linear law, where the compiler hoists it), instead of two divisions.
+        const double inv_kt = 1.0 / k_t;
+        xx = slip ? rx * inv_kt : xx;
+        xy = slip ? ry * inv_kt : xy;
         ftx = slip ? sfx : ftx;
         fty = slip ? sfy : fty;
     }
