@@ -19,6 +19,7 @@
 
 #include "hopper/engine/contact.hpp"
 #include "hopper/engine/system.hpp"
+#include "integrate.hpp"
 #include "laws.hpp"
 
 namespace hopper::engine::detail {

@@ -259,6 +259,9 @@ ForceSums forces(const ForceArgs& a) {
             wfy -= fyw[t];
             if constexpr (rot) a.tq[i] += tqw[t];
         }
+        // The block's forces are final (later blocks' rows never name its particles) and
+        // nothing later reads their state: the corrector, fused (integrate.hpp).
+        correct_range<rot>(a.correct, a.fx, a.fy, a.tq, i0, i1);
     }
     sums.max_overlap = max_ov;
     sums.wall_fx = wfx;

@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "force_batch.hpp"
+#include "integrate.hpp"
 #include "hopper/core/error.hpp"
 #include "laws.hpp"
 #include "pair_force.hpp"
@@ -16,12 +17,10 @@ namespace hopper::engine {
 
 namespace {
 
-// Gear 5-value predictor-corrector for second-order equations (Allen & Tildesley, appendix E):
-// corrector coefficients for r, dt v, dt^2/2 a, dt^3/6 b, dt^4/24 c.
-constexpr double gear_c0 = 19.0 / 120.0;
-constexpr double gear_c1 = 3.0 / 4.0;
-constexpr double gear_c3 = 1.0 / 2.0;
-constexpr double gear_c4 = 1.0 / 12.0;
+using detail::gear_c0;
+using detail::gear_c1;
+using detail::gear_c3;
+using detail::gear_c4;
 
 // The integrator's loops are element by element (no sums across particles), so a vector
 // instruction gives each particle exactly the bits of the scalar code: each loop is compiled for
@@ -94,14 +93,8 @@ template <bool X>
                                                      double* __restrict x2, double* __restrict x3,
                                                      double* __restrict x4) {
     const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
-    for (std::size_t i = 0; i < n; ++i) {
-        const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
-        if constexpr (X) x[i] += gear_c0 * e;
-        v[i] += gear_c1 * e * inv_dt;
-        x2[i] += e;
-        x3[i] += gear_c3 * e;
-        x4[i] += gear_c4 * e;
-    }
+    for (std::size_t i = 0; i < n; ++i)
+        detail::gear_correct_element<X>(i, h, inv_dt, g, force, inv_mass, x, v, x2, x3, x4);
 }
 
 HOPPER_ISA_CLONES
@@ -256,8 +249,39 @@ struct KernelImpl final : System::Kernel {
         a.sw = two ? (gear_corr ? s.aw_.data() : s.w_.data()) : a.w;
     }
 
-    double forces(System& s) override {
+    // The corrector, fused into the force pass (integrate.hpp) when `correct`.
+    void correct_args(System& s, detail::CorrectArgs& c) const {
+        const double dt = s.config_.dt;
+        c.scheme = S == Scheme::gear4 ? detail::CorrectArgs::gear4 : detail::CorrectArgs::verlet;
+        // The same expressions as the separate loops (gear_correct_axis, verlet_axis).
+        c.h = 0.5 * dt * dt;
+        c.inv_dt = 1.0 / dt;
+        c.hdt = 0.5 * dt;
+        c.gx = s.config_.gravity.x();
+        c.gy = s.config_.gravity.y();
+        c.inv_m = s.inv_m_.data();
+        c.inv_I = s.inv_I_.data();
+        c.x = s.x_.data();
+        c.y = s.y_.data();
+        c.vx = s.vx_.data();
+        c.vy = s.vy_.data();
+        c.w = s.w_.data();
+        if constexpr (S == Scheme::gear4) {
+            c.x2 = s.x2_.data();
+            c.x3 = s.x3_.data();
+            c.x4 = s.x4_.data();
+            c.y2 = s.y2_.data();
+            c.y3 = s.y3_.data();
+            c.y4 = s.y4_.data();
+            c.w2 = s.w2_.data();
+            c.w3 = s.w3_.data();
+            c.w4 = s.w4_.data();
+        }
+    }
+
+    double forces(System& s, bool correct) override {
         detail::ForceArgs a = s.force_args();
+        if (correct) correct_args(s, a.correct);
         bool two = false;
         velocity_sets(s, a, two);
         detail::ForceSums sums;
@@ -272,7 +296,8 @@ struct KernelImpl final : System::Kernel {
     }
 
     // The reference force pass: one loop over the neighbour list, each touching pair evaluated
-    // where it is found. The batched paths must give exactly its bits (test_kernel_paths).
+    // where it is found, each particle corrected once its row is done (when a.correct says so).
+    // The batched paths must give exactly its bits (test_kernel_paths).
     // Round 3 (docs/performance.md): every column and coefficient is read through a local
     // (__restrict pointers, ContactParams by value), so that the stores of the partners' forces
     // do not make the compiler reload them for every contact; the sums are the same.
@@ -281,15 +306,15 @@ struct KernelImpl final : System::Kernel {
         using detail::PairInput;
         using detail::PairOutput;
         const int n = a.n;
-        const double* __restrict x = a.x;
-        const double* __restrict y = a.y;
+        const double* x = a.x;
+        const double* y = a.y;
         const double* __restrict r = a.r;
-        const double* __restrict vx = a.vx;
-        const double* __restrict vy = a.vy;
-        const double* __restrict w = a.w;
-        const double* __restrict svx = a.svx;
-        const double* __restrict svy = a.svy;
-        const double* __restrict sw = a.sw;
+        const double* vx = a.vx;
+        const double* vy = a.vy;
+        const double* w = a.w;
+        const double* svx = a.svx;
+        const double* svy = a.svy;
+        const double* sw = a.sw;
         double* __restrict fx = a.fx;
         double* __restrict fy = a.fy;
         double* __restrict tq = a.tq;
@@ -309,6 +334,7 @@ struct KernelImpl final : System::Kernel {
         const ContactParams pp = a.pp, pw = a.pw;
         const double dt = a.dt, lever_half = a.lever_half;
         const double ox = a.ox, oy = a.oy, vwx = a.vwx, vwy = a.vwy;
+        const detail::CorrectArgs cor = a.correct;
         std::fill(fx, fx + n, 0.0);
         std::fill(fy, fy + n, 0.0);
         if constexpr (rot) std::fill(tq, tq + n, 0.0);
@@ -398,6 +424,9 @@ struct KernelImpl final : System::Kernel {
             wfx -= wfxi;
             wfy -= wfyi;
             if constexpr (rot) tq[i] += tqi;
+            // Particle i's force is final (later rows never name it) and nothing later reads
+            // its state: the corrector, fused (integrate.hpp).
+            detail::correct_range<rot>(cor, fx, fy, tq, i, i + 1);
         }
         return {max_ov, wfx, wfy, contacts};
     }

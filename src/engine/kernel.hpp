@@ -16,8 +16,12 @@ struct System::Kernel {
     // (NaN when the state is not finite). Loops use __restrict pointers (the columns never
     // alias) so that the compiler vectorizes them.
     virtual double predict(System& s) = 0;
-    // Computes forces and torques; returns the largest overlap of this evaluation.
-    virtual double forces(System& s) = 0;
+    // Computes forces and torques; returns the largest overlap of this evaluation. With
+    // `correct`, the integrator's correction (Gear corrector, verlet's closing half kick) is
+    // fused into the pass (integrate.hpp): the same bits as forces, then correct().
+    virtual double forces(System& s, bool correct) = 0;
+    // The corrector as a separate pass (the fused form above gives the same bits; System::step
+    // uses the fused one).
     virtual void correct(System& s) = 0;
     // Initialises the integrator's history from the current forces.
     virtual void prime(System& s) = 0;
