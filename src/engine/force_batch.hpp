@@ -39,7 +39,12 @@ struct ForceArgs {
     ContactParams pp, pw;
     double dt, lever_half;
     const double *pmbar, *wmbar;  // reduced mass per list entry (set at each rebuild)
+    // R* and the law's pair constants per list entry (set at each rebuild; null when the law
+    // needs none): see System::pair_constants.
+    const double *prstar, *wrstar, *pK, *wK, *peta, *weta;
     const int *po, *wo;           // the particle each list entry belongs to (set at each rebuild)
+    // The corrector fused into the pass (integrate.hpp; scheme none: forces only).
+    CorrectArgs correct;
     // Scratch of the batched passes, for one block: flags per list entry, then per touching entry.
     struct Scratch {
         int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles

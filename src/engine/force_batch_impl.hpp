@@ -100,6 +100,9 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     const int* __restrict owner = a.scratch.owner;
     const int* __restrict partner = a.scratch.partner;
     const double* __restrict mbar = Wall ? a.wmbar : a.pmbar;
+    const double* __restrict rstar = Wall ? a.wrstar : a.prstar;
+    const double* __restrict hK = Wall ? a.wK : a.pK;
+    const double* __restrict heta = Wall ? a.weta : a.peta;
     const double* __restrict x = a.x;
     const double* __restrict y = a.y;
     const double* __restrict r = a.r;
@@ -132,6 +135,11 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
         q.rs = q.ri + q.rj;
         q.d2 = q.dx * q.dx + q.dy * q.dy;
         q.mbar = mbar[k];
+        if constexpr (law_needs_rstar<Law>) q.rstar = rstar[k];
+        if constexpr (law_needs_pair_constants<Law>) {
+            q.hertz_K = hK[k];
+            q.hertz_eta = heta[k];
+        }
         q.vix = vx[i];
         q.viy = vy[i];
         q.wi = rot ? w[i] : 0.0;

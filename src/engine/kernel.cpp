@@ -331,6 +331,12 @@ struct KernelImpl final : System::Kernel {
         const double* __restrict wr = a.wr;
         const double* __restrict pmbar = a.pmbar;
         const double* __restrict wmbar = a.wmbar;
+        const double* __restrict prstar = a.prstar;
+        const double* __restrict wrstar = a.wrstar;
+        const double* __restrict pK = a.pK;
+        const double* __restrict wK = a.wK;
+        const double* __restrict peta = a.peta;
+        const double* __restrict weta = a.weta;
         const ContactParams pp = a.pp, pw = a.pw;
         const double dt = a.dt, lever_half = a.lever_half;
         const double ox = a.ox, oy = a.oy, vwx = a.vwx, vwy = a.vwy;
@@ -370,6 +376,11 @@ struct KernelImpl final : System::Kernel {
                     continue;
                 }
                 q.mbar = pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
+                if constexpr (law_needs_rstar<Law>) q.rstar = prstar[k];
+                if constexpr (law_needs_pair_constants<Law>) {
+                    q.hertz_K = pK[k];
+                    q.hertz_eta = peta[k];
+                }
                 q.vjx = vx[j];
                 q.vjy = vy[j];
                 q.wj = rot ? w[j] : 0.0;
@@ -411,6 +422,11 @@ struct KernelImpl final : System::Kernel {
                     continue;
                 }
                 q.mbar = wmbar[k];
+                if constexpr (law_needs_rstar<Law>) q.rstar = wrstar[k];
+                if constexpr (law_needs_pair_constants<Law>) {
+                    q.hertz_K = wK[k];
+                    q.hertz_eta = weta[k];
+                }
                 const PairOutput o =
                     detail::pair_force<Law, Corr, false>(pw, dt, lever_half, q, sx, sy);
                 wfxi += o.fx;

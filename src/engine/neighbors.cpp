@@ -237,6 +237,35 @@ void System::pair_constants() {
             wown_[k] = int(i);
         }
     }
+    // R* and the Hertz law's constants per entry (the same expressions as the law's, once per
+    // rebuild instead of once per step): only for the laws that read them.
+    const bool hertz = config_.normal_law == NormalLaw::hertz;
+    const bool rstar = hertz || config_.rolling;
+    for (auto* col : {&prstar_, &wrstar_, &phk_, &whk_, &pheta_, &wheta_})
+        col->clear();
+    if (!rstar) return;
+    prstar_.resize(pj_.size());
+    wrstar_.resize(wj_.size());
+    if (hertz) {
+        phk_.resize(pj_.size());
+        pheta_.resize(pj_.size());
+        whk_.resize(wj_.size());
+        wheta_.resize(wj_.size());
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
+            prstar_[k] = reduced_radius(r_[i], r_[pj_[k]]);
+            if (hertz)
+                HertzSpringLaw::pair_constants(config_.particle, prstar_[k], pmbar_[k], phk_[k],
+                                               pheta_[k]);
+        }
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
+            wrstar_[k] = reduced_radius(r_[i], wr_[wj_[k]]);
+            if (hertz)
+                HertzSpringLaw::pair_constants(config_.wall, wrstar_[k], wmbar_[k], whk_[k],
+                                               wheta_[k]);
+        }
+    }
 }
 
 // Contact springs survive rebuilds keyed by the persistent ids of the pair: saved grouped by

@@ -20,6 +20,9 @@ struct PairInput {
     double dx, dy, d2, rs, mbar, ri, rj;  // mbar = 1 / (1/m_i + 1/m_j)
     double vix, viy, wi, vjx, vjy, wj;
     double six, siy, swi, sjx, sjy, swj;
+    // Constants of the pair from the rebuild, read only by the laws that need them:
+    // R* (law_needs_rstar) and the law's pair_constants() (law_needs_pair_constants).
+    double rstar, hertz_K, hertz_eta;
 };
 
 // The force on i (the partner gets -F), the torques' parts t_i = l_i (n x F_t) and
@@ -79,7 +82,11 @@ HOPPER_HOT_INLINE PairOutput pair_force(const ContactParams& p, double dt, doubl
         }
     }
     ContactInput c{nx, ny, overlap, mbar, vx, vy, sx, sy, dts};
-    if constexpr (law_needs_rstar<Law>) c.rstar = q.ri * q.rj / (q.ri + q.rj);
+    if constexpr (law_needs_rstar<Law>) c.rstar = q.rstar;  // reduced_radius, at the rebuild
+    if constexpr (law_needs_pair_constants<Law>) {
+        c.hertz_K = q.hertz_K;
+        c.hertz_eta = q.hertz_eta;
+    }
     const ContactOutput f = Law::template evaluate<Select>(p, c, hx, hy);
     PairOutput out;
     out.fx = f.fn * nx + f.ftx;

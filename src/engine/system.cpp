@@ -270,6 +270,12 @@ detail::ForceArgs System::force_args() {
     a.lever_half = config_.contact_lever ? 0.5 : 0.0;
     a.pmbar = pmbar_.data();
     a.wmbar = wmbar_.data();
+    a.prstar = prstar_.data();
+    a.wrstar = wrstar_.data();
+    a.pK = phk_.data();
+    a.wK = whk_.data();
+    a.peta = pheta_.data();
+    a.weta = wheta_.data();
     a.po = pown_.data();
     a.wo = wown_.data();
     if (kernel_path_ != KernelPath::reference) {

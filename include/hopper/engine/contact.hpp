@@ -74,6 +74,9 @@ struct ContactInput {
     double sx, sy;     // relative contact velocity that grows the spring (= v unless corrected)
     double dt_spring;  // time over which the spring grows this step (dt, or less at onset)
     double rstar = 0;  // R_i R_j / (R_i + R_j): set only for laws with needs_rstar
+    // Constants of the pair, computed at each neighbour rebuild by the law's pair_constants():
+    // set only for laws with needs_pair_constants (the Hertz law: K and alpha sqrt(mbar K)).
+    double hertz_K = 0, hertz_eta = 0;
 };
 struct ContactOutput {
     double fn;        // signed normal magnitude: the normal force is fn n
@@ -199,13 +202,23 @@ struct HertzSpringLaw {
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
     static constexpr bool needs_rstar = true;
+    static constexpr bool needs_pair_constants = true;
+    // The pair's constants (round 3: computed once per neighbour rebuild, not per step; the
+    // same expressions, so the same bits): K = hertz_k sqrt(R*) and the damping's
+    // alpha sqrt(mbar K), which evaluate() multiplies by x^(1/4).
+    HOPPER_HOT_INLINE static void pair_constants(const ContactParams& p, double rstar,
+                                                 double mbar, double& K, double& eta0) {
+        K = p.hertz_k * std::sqrt(rstar);
+        eta0 = p.hertz_alpha * std::sqrt(mbar * K);
+    }
+    // c.hertz_K and c.hertz_eta from pair_constants().
     template <bool Select = false>
     HOPPER_HOT_INLINE static ContactOutput evaluate(const ContactParams& p, const ContactInput& c,
                                                     double& hx, double& hy) {
-        const double K = p.hertz_k * std::sqrt(c.rstar);
-        const double sx = std::sqrt(c.overlap);                         // x^(1/2)
-        const double qx = std::sqrt(sx);                                // x^(1/4)
-        const double eta = p.hertz_alpha * std::sqrt(c.mbar * K) * qx;  // kg/s
+        const double K = c.hertz_K;
+        const double sx = std::sqrt(c.overlap);  // x^(1/2)
+        const double qx = std::sqrt(sx);         // x^(1/4)
+        const double eta = c.hertz_eta * qx;     // kg/s: alpha sqrt(mbar K) x^(1/4)
         const double v_n = c.vx * c.nx + c.vy * c.ny;
         const double fn = K * c.overlap * sx - eta * v_n;
         const double kt = p.hertz_kt_ratio * 1.5 * K * sx;
@@ -234,6 +247,16 @@ template <class Law>
 inline constexpr bool law_resists_rolling = requires {
     Law::rolling;
 };
+// Whether a law has constants per pair (pair_constants(), computed at each neighbour rebuild).
+template <class Law>
+inline constexpr bool law_needs_pair_constants = requires {
+    Law::needs_pair_constants;
+};
+
+// R* = R_i R_j / (R_i + R_j), a constant of the pair (computed at each neighbour rebuild).
+HOPPER_HOT_INLINE double reduced_radius(double ri, double rj) {
+    return ri * rj / (ri + rj);
+}
 
 // The rolling resistance torque on i: -mu_r R* |F_n| sign(w_i - w_j) (0 at w_i = w_j). A select,
 // not a branch, so that the batched passes vectorize.

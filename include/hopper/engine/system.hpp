@@ -219,6 +219,9 @@ class System {
     // Reduced mass per list entry, 1 / (1/m_i + 1/m_j) (walls: 1 / (1/m_i)): a per-pair constant
     // set at each rebuild, so that the force pass divides less.
     std::vector<double> pmbar_, wmbar_;
+    // More per-entry constants, only for the laws that read them (round 3): R* (the Hertz law,
+    // rolling resistance) and the Hertz law's K and alpha sqrt(mbar K) (HertzSpringLaw).
+    std::vector<double> prstar_, wrstar_, phk_, whk_, pheta_, wheta_;
     // The mobile particle each list entry belongs to (the batched force pass loops over entries).
     std::vector<int> pown_, wown_;
     // Cell grid for mobile particles (rebuilt with the list) and for walls (when walls change).
