@@ -3,7 +3,8 @@
 // instantiation is shared between differently compiled objects) and HOPPER_FORCE_TABLE (the
 // name of its table getter). No include guard: one inclusion per translation unit.
 //
-// Only always-inlined code and builtins may be called from here: a function emitted out of line
+// Only always-inlined code, builtins and ordinary functions defined in other translation units
+// (correct_block) may be called from here: a function emitted out of line
 // in an AVX-512 object and merged by the linker with the baseline one would run AVX-512
 // instructions on any CPU.
 
@@ -268,8 +269,9 @@ ForceSums forces(const ForceArgs& a) {
             if constexpr (rot) a.tq[i] += tqw[t];
         }
         // The block's forces are final (later blocks' rows never name its particles) and
-        // nothing later reads their state: the corrector, fused (integrate.hpp).
-        correct_range<rot>(a.correct, a.fx, a.fy, a.tq, i0, i1);
+        // nothing later reads their state: the corrector, fused (integrate.hpp; an ordinary
+        // call into kernel.cpp's multi-versioned loops, not code compiled here).
+        correct_block(a.correct, a.fx, a.fy, a.tq, rot, i0, i1);
     }
     sums.max_overlap = max_ov;
     sums.wall_fx = wfx;

@@ -253,10 +253,7 @@ struct KernelImpl final : System::Kernel {
     void correct_args(System& s, detail::CorrectArgs& c) const {
         const double dt = s.config_.dt;
         c.scheme = S == Scheme::gear4 ? detail::CorrectArgs::gear4 : detail::CorrectArgs::verlet;
-        // The same expressions as the separate loops (gear_correct_axis, verlet_axis).
-        c.h = 0.5 * dt * dt;
-        c.inv_dt = 1.0 / dt;
-        c.hdt = 0.5 * dt;
+        c.dt = dt;
         c.gx = s.config_.gravity.x();
         c.gy = s.config_.gravity.y();
         c.inv_m = s.inv_m_.data();
@@ -341,6 +338,8 @@ struct KernelImpl final : System::Kernel {
         const double dt = a.dt, lever_half = a.lever_half;
         const double ox = a.ox, oy = a.oy, vwx = a.vwx, vwy = a.vwy;
         const detail::CorrectArgs cor = a.correct;
+        constexpr int correct_rows = 256;  // the fused corrector's block (as the batched paths')
+        int corrected = 0;                 // particles [0, corrected) are corrected
         std::fill(fx, fx + n, 0.0);
         std::fill(fy, fy + n, 0.0);
         if constexpr (rot) std::fill(tq, tq + n, 0.0);
@@ -441,12 +440,35 @@ struct KernelImpl final : System::Kernel {
             wfy -= wfyi;
             if constexpr (rot) tq[i] += tqi;
             // Particle i's force is final (later rows never name it) and nothing later reads
-            // its state: the corrector, fused (integrate.hpp).
-            detail::correct_range<rot>(cor, fx, fy, tq, i, i + 1);
+            // its state: the corrector, fused (integrate.hpp), once per block of rows.
+            if (i + 1 - corrected == correct_rows || i + 1 == n) {
+                detail::correct_block(cor, fx, fy, tq, rot, corrected, i + 1);
+                corrected = i + 1;
+            }
         }
         return {max_ov, wfx, wfy, contacts};
     }
 };
+
+void detail::correct_block(const CorrectArgs& c, const double* fx, const double* fy,
+                           const double* tq, bool rot, int i0, int i1) {
+    const std::size_t n = i1 > i0 ? std::size_t(i1 - i0) : 0;
+    if (n == 0) return;
+    if (c.scheme == CorrectArgs::gear4) {
+        gear_correct_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.x + i0, c.vx + i0, c.x2 + i0,
+                          c.x3 + i0, c.x4 + i0);
+        gear_correct_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.y + i0, c.vy + i0, c.y2 + i0,
+                          c.y3 + i0, c.y4 + i0);
+        if (rot)
+            gear_correct_axis(n, c.dt, 0.0, tq + i0, c.inv_I + i0, nullptr, c.w + i0, c.w2 + i0,
+                              c.w3 + i0, c.w4 + i0);
+    } else if (c.scheme == CorrectArgs::verlet) {
+        // Velocity Verlet: the closing half kick with the new forces.
+        verlet_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.vx + i0, nullptr);
+        verlet_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.vy + i0, nullptr);
+        if (rot) verlet_axis(n, c.dt, 0.0, tq + i0, c.inv_I + i0, c.w + i0, nullptr);
+    }
+}
 
 namespace {
 
