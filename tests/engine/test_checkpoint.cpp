@@ -157,7 +157,7 @@ TEST_P(CheckpointResume, StoppedAtRandomStepsAndResumedEndsBitIdentical) {
 
 INSTANTIATE_TEST_SUITE_P(
     Engine, CheckpointResume,
-    ::testing::Values(Case{"gear4", Scheme::gear4, false, 1},
+    ::testing::Values(Case{"gear4", Scheme::gear4, false, 3},
                       Case{"verlet", Scheme::verlet, false, 2},
                       Case{"gear4_fields", Scheme::gear4, true, 2},
                       Case{"verlet_fields", Scheme::verlet, true, 1},
