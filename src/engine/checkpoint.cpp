@@ -81,6 +81,7 @@ void CheckpointAccess::save(const System& s, StateWriter& w) {
 void CheckpointAccess::restore(System& s, StateReader& r) {
     s.time_ = r.get<double>();
     s.ready_ = r.get<std::uint8_t>() != 0;
+    s.ahead_ = false;  // the fused step's look-ahead is not state: recomputed by a step
     s.need_rebuild_ = r.get<std::uint8_t>() != 0;
     s.walls_changed_ = r.get<std::uint8_t>() != 0;
     s.history_saved_ = r.get<std::uint8_t>() != 0;

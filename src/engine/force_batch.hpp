@@ -42,7 +42,7 @@ struct ForceArgs {
     // R* and the law's pair constants per list entry (set at each rebuild; null when the law
     // needs none): see System::pair_constants.
     const double *prstar, *wrstar, *pK, *wK, *peta, *weta;
-    const int *po, *wo;           // the particle each list entry belongs to (set at each rebuild)
+    const int *po, *wo;  // the particle each list entry belongs to (set at each rebuild)
     // The corrector fused into the pass (integrate.hpp; scheme none: forces only).
     CorrectArgs correct;
     // Scratch of the batched passes, for one block: flags per list entry, then per touching entry.
@@ -55,6 +55,9 @@ struct ForceArgs {
 struct ForceSums {
     double max_overlap = 0.0, wall_fx = 0.0, wall_fy = 0.0;
     int contacts = 0;
+    // With the corrector fused: the largest squared displacement the next step's predictor will
+    // give (NaN if not finite; CorrectArgs::next_displacement).
+    double next_displacement2 = 0.0;
 };
 
 using ForceFn = ForceSums (*)(const ForceArgs&);

@@ -18,8 +18,8 @@ namespace hopper::engine::detail::HOPPER_FORCE_NS {
 namespace {
 
 // Particles per block: their list entries' scratch (about 3 entries per particle) stays in the
-// first-level cache between the passes.
-constexpr int block_particles = 256;
+// first-level cache between the passes. The fused integrator's block (integrate.hpp).
+constexpr int block_particles = block_rows;
 
 // Pass 1 over the list entries [k0, k1) of one kind of partner (mobile or wall): the touch test
 // (vectorized), exactly as the reference loop computes it; the springs of the entries that do
@@ -231,21 +231,25 @@ void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fx
 template <class Law, bool Corr>
 ForceSums forces(const ForceArgs& a) {
     constexpr bool rot = Law::has_tangential;
-    for (int i = 0; i < a.n; ++i) {
-        a.fx[i] = 0.0;
-        a.fy[i] = 0.0;
+    if (!a.correct.predict) {  // the fused step zeroes them block by block (predict_ahead)
+        for (int i = 0; i < a.n; ++i) {
+            a.fx[i] = 0.0;
+            a.fy[i] = 0.0;
+        }
+        if constexpr (rot)
+            for (int i = 0; i < a.n; ++i)
+                a.tq[i] = 0.0;
     }
-    if constexpr (rot)
-        for (int i = 0; i < a.n; ++i)
-            a.tq[i] = 0.0;
     ForceSums sums;
-    double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
-    int contacts = 0;
+    double max_ov = 0.0, wfx = 0.0, wfy = 0.0, next_d2 = 0.0;
+    int contacts = 0, predicted = 0;
     double fxm[block_particles], fym[block_particles], tqm[block_particles];
     double fxw[block_particles], fyw[block_particles], tqw[block_particles];
     for (int i0 = 0; i0 < a.n; i0 += block_particles) {
         const int i1 = i0 + block_particles < a.n ? i0 + block_particles : a.n;
         const int bi = i1 - i0;
+        // The fused step: the block's particles and their partners predicted first.
+        predict_ahead(a.correct, a.fx, a.fy, a.tq, rot, i0 / block_particles, predicted);
         // Mobile partners (the torques from mobile partners start at 0).
         int m = touching<Law, false>(a, a.ps[i0], a.ps[i1]);
         max_ov = evaluate<Law, Corr, false>(a, m, max_ov);
@@ -271,8 +275,9 @@ ForceSums forces(const ForceArgs& a) {
         // The block's forces are final (later blocks' rows never name its particles) and
         // nothing later reads their state: the corrector, fused (integrate.hpp; an ordinary
         // call into kernel.cpp's multi-versioned loops, not code compiled here).
-        correct_block(a.correct, a.fx, a.fy, a.tq, rot, i0, i1);
+        next_d2 = max_or_nan(next_d2, correct_block(a.correct, a.fx, a.fy, a.tq, rot, i0, i1));
     }
+    sums.next_displacement2 = next_d2;
     sums.max_overlap = max_ov;
     sums.wall_fx = wfx;
     sums.wall_fy = wfy;

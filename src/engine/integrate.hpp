@@ -23,9 +23,8 @@ inline constexpr double gear_c4 = 1.0 / 12.0;
 // a = force * inv_mass + g (h = dt^2/2). x may be null (rotation: the angle is not tracked).
 template <bool X>
 HOPPER_HOT_INLINE void gear_correct_element(std::size_t i, double h, double inv_dt, double g,
-                                            const double* force, const double* inv_mass,
-                                            double* x, double* v, double* x2, double* x3,
-                                            double* x4) {
+                                            const double* force, const double* inv_mass, double* x,
+                                            double* v, double* x2, double* x3, double* x4) {
     const double e = h * (force[i] * inv_mass[i] + g) - x2[i];
     if constexpr (X) x[i] += gear_c0 * e;
     v[i] += gear_c1 * e * inv_dt;
@@ -34,23 +33,64 @@ HOPPER_HOT_INLINE void gear_correct_element(std::size_t i, double h, double inv_
     x4[i] += gear_c4 * e;
 }
 
-// What the fused corrector needs: the scheme (none: forces only, e.g. the priming evaluation)
-// and the System's columns.
+// The particles of one block of the fused passes: the reference loop corrects (and predicts
+// ahead, below) every block_rows rows, the batched passes work block by block of the same size.
+inline constexpr int block_rows = 256;
+
+// What the fused integrator needs: the scheme (none: forces only, e.g. the priming evaluation)
+// and the System's columns. The fused step (round 3, docs/performance.md, "The fused step"):
+// with `predict`, the force pass also runs the predictor, a block ahead of the rows that read
+// the predicted state (`reach`), and zeroes the forces there; with `next_displacement` the
+// corrector also returns the largest squared displacement from (xref, yref) that the next
+// step's predictor will give, so that the next step knows without a pass of its own whether
+// it must rebuild the neighbour list.
 struct CorrectArgs {
     enum Scheme { none, gear4, verlet } scheme = none;
     double dt = 0.0, gx = 0.0, gy = 0.0;
     const double *inv_m = nullptr, *inv_I = nullptr;
     double *x = nullptr, *y = nullptr, *vx = nullptr, *vy = nullptr, *w = nullptr;
-    double *x2 = nullptr, *x3 = nullptr, *x4 = nullptr, *y2 = nullptr, *y3 = nullptr,
-           *y4 = nullptr, *w2 = nullptr, *w3 = nullptr, *w4 = nullptr;
+    double *x2 = nullptr, *x3 = nullptr, *x4 = nullptr, *y2 = nullptr, *y3 = nullptr, *y4 = nullptr,
+           *w2 = nullptr, *w3 = nullptr, *w4 = nullptr;
+    // The predictor's second velocity set (the contact corrections; null without them).
+    double *mx = nullptr, *my = nullptr, *mw = nullptr;
+    bool predict = false;
+    // Block b (rows [b block_rows, (b + 1) block_rows)) reads the particles [0, reach[b]):
+    // its own and its rows' partners (System::pair_constants).
+    const int* reach = nullptr;
+    bool next_displacement = false;
+    const double *xref = nullptr, *yref = nullptr;
 };
 
 // The corrector over the particles [i0, i1), whose forces (and torques when rot) are final:
 // the integrator's own multi-versioned loops (kernel.cpp: AVX-512, AVX2 or the baseline, picked
 // when the program starts) on that range, so the fused corrector is vectorized on every path
 // and gives the separate loops' bits. Called once per block of particles (the reference loop
-// every 256 rows, the batched passes after each block). Defined in kernel.cpp, not inline.
-void correct_block(const CorrectArgs& c, const double* fx, const double* fy, const double* tq,
-                   bool rot, int i0, int i1);
+// every block_rows rows, the batched passes after each block). Defined in kernel.cpp, not
+// inline. Returns the block's largest squared next displacement when c.next_displacement (NaN
+// if a position is not finite), else 0.
+double correct_block(const CorrectArgs& c, const double* fx, const double* fy, const double* tq,
+                     bool rot, int i0, int i1);
+
+// The predictor over the particles [j0, j1) (the separate pass's loops on that range, so the
+// same bits), then their forces (and torques when rot) set to zero: called by the fused passes
+// before a block's rows read those particles (kernel.cpp).
+void predict_block(const CorrectArgs& c, double* fx, double* fy, double* tq, bool rot, int j0,
+                   int j1);
+
+// The fused passes' combination of the blocks' next displacements: the maximum (exact in any
+// order), NaN if either is NaN. (Always inlined, as everything the batched passes call.)
+HOPPER_HOT_INLINE double max_or_nan(double a, double b) {
+    return (a != a || b != b) ? a + b : (b > a ? b : a);
+}
+
+// Predicts ahead for block b when the pass predicts (see CorrectArgs): [predicted, reach[b]).
+HOPPER_HOT_INLINE void predict_ahead(const CorrectArgs& c, double* fx, double* fy, double* tq,
+                                     bool rot, int b, int& predicted) {
+    if (!c.predict) return;
+    const int want = c.reach[b];
+    if (want <= predicted) return;
+    predict_block(c, fx, fy, tq, rot, predicted, want);
+    predicted = want;
+}
 
 }  // namespace hopper::engine::detail

@@ -8,8 +8,8 @@
 #include <type_traits>
 
 #include "force_batch.hpp"
-#include "integrate.hpp"
 #include "hopper/core/error.hpp"
+#include "integrate.hpp"
 #include "laws.hpp"
 #include "pair_force.hpp"
 
@@ -154,6 +154,55 @@ double max_displacement2(std::size_t n, const double* __restrict x, const double
     return bad ? std::numeric_limits<double>::quiet_NaN() : maxd2;
 }
 
+// The largest squared displacement from (xr, yr) of the positions the next step's predictor
+// will give (the fused step, integrate.hpp): the predictor's own expressions (gear_predict_loop,
+// verlet_loop), so the same bits as its pass followed by max_displacement2, without storing them.
+HOPPER_ISA_CLONES
+double next_displacement2_gear(std::size_t n, double dt, const double* __restrict x,
+                               const double* __restrict y, const double* __restrict vx,
+                               const double* __restrict vy, const double* __restrict x2,
+                               const double* __restrict x3, const double* __restrict x4,
+                               const double* __restrict y2, const double* __restrict y3,
+                               const double* __restrict y4, const double* __restrict xr,
+                               const double* __restrict yr) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    double maxd2 = 0.0;
+    int bad = 0;
+#pragma omp simd reduction(max : maxd2) reduction(| : bad)
+    for (std::size_t i = 0; i < n; ++i) {
+        const double px = x[i] + (dt * vx[i] + x2[i] + x3[i] + x4[i]);
+        const double py = y[i] + (dt * vy[i] + y2[i] + y3[i] + y4[i]);
+        const double dx = px - xr[i], dy = py - yr[i];
+        const double d2 = dx * dx + dy * dy;
+        maxd2 = d2 > maxd2 ? d2 : maxd2;
+        bad |= d2 < inf ? 0 : 1;
+    }
+    return bad ? std::numeric_limits<double>::quiet_NaN() : maxd2;
+}
+
+HOPPER_ISA_CLONES
+double next_displacement2_verlet(std::size_t n, double dt, double gx, double gy,
+                                 const double* __restrict fx, const double* __restrict fy,
+                                 const double* __restrict inv_m, const double* __restrict x,
+                                 const double* __restrict y, const double* __restrict vx,
+                                 const double* __restrict vy, const double* __restrict xr,
+                                 const double* __restrict yr) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const double hdt = 0.5 * dt;
+    double maxd2 = 0.0;
+    int bad = 0;
+#pragma omp simd reduction(max : maxd2) reduction(| : bad)
+    for (std::size_t i = 0; i < n; ++i) {
+        const double ux = vx[i] + hdt * (fx[i] * inv_m[i] + gx);
+        const double uy = vy[i] + hdt * (fy[i] * inv_m[i] + gy);
+        const double dx = (x[i] + dt * ux) - xr[i], dy = (y[i] + dt * uy) - yr[i];
+        const double d2 = dx * dx + dy * dy;
+        maxd2 = d2 > maxd2 ? d2 : maxd2;
+        bad |= d2 < inf ? 0 : 1;
+    }
+    return bad ? std::numeric_limits<double>::quiet_NaN() : maxd2;
+}
+
 }  // namespace
 
 template <class Law, Scheme S>
@@ -249,8 +298,9 @@ struct KernelImpl final : System::Kernel {
         a.sw = two ? (gear_corr ? s.aw_.data() : s.w_.data()) : a.w;
     }
 
-    // The corrector, fused into the force pass (integrate.hpp) when `correct`.
-    void correct_args(System& s, detail::CorrectArgs& c) const {
+    // The corrector, fused into the force pass (integrate.hpp) when `correct`; the predictor
+    // too when `predict` (the fused step: System::step).
+    void correct_args(System& s, detail::CorrectArgs& c, bool predict) const {
         const double dt = s.config_.dt;
         c.scheme = S == Scheme::gear4 ? detail::CorrectArgs::gear4 : detail::CorrectArgs::verlet;
         c.dt = dt;
@@ -274,11 +324,29 @@ struct KernelImpl final : System::Kernel {
             c.w3 = s.w3_.data();
             c.w4 = s.w4_.data();
         }
+        // The next step's displacement, for the fused step's rebuild test.
+        c.next_displacement = true;
+        c.xref = s.xref_.data();
+        c.yref = s.yref_.data();
+        if (predict) {
+            const std::size_t n = s.x_.size();
+            const bool second = s.config_.contact_corrections && (S == Scheme::verlet || hist);
+            if (second) {  // as in predict()
+                s.avx_.resize(n);
+                s.avy_.resize(n);
+                s.aw_.resize(n);
+            }
+            c.mx = second ? s.avx_.data() : nullptr;
+            c.my = second ? s.avy_.data() : nullptr;
+            c.mw = second && rot ? s.aw_.data() : nullptr;
+            c.predict = true;
+            c.reach = s.block_reach_.data();
+        }
     }
 
-    double forces(System& s, bool correct) override {
+    detail::ForceSums forces(System& s, bool correct, bool predict) override {
         detail::ForceArgs a = s.force_args();
-        if (correct) correct_args(s, a.correct);
+        if (correct) correct_args(s, a.correct, predict);
         bool two = false;
         velocity_sets(s, a, two);
         detail::ForceSums sums;
@@ -289,11 +357,12 @@ struct KernelImpl final : System::Kernel {
         }
         s.wall_force_ = Vec2(sums.wall_fx, sums.wall_fy);
         s.contacts_ = sums.contacts;
-        return sums.max_overlap;
+        return sums;
     }
 
     // The reference force pass: one loop over the neighbour list, each touching pair evaluated
-    // where it is found, each particle corrected once its row is done (when a.correct says so).
+    // where it is found, each block of rows corrected once its rows are done (when a.correct
+    // says so) and, in the fused step, predicted before its rows (a.correct.predict).
     // The batched paths must give exactly its bits (test_kernel_paths).
     // Round 3 (docs/performance.md): every column and coefficient is read through a local
     // (__restrict pointers, ContactParams by value), so that the stores of the partners' forces
@@ -338,122 +407,127 @@ struct KernelImpl final : System::Kernel {
         const double dt = a.dt, lever_half = a.lever_half;
         const double ox = a.ox, oy = a.oy, vwx = a.vwx, vwy = a.vwy;
         const detail::CorrectArgs cor = a.correct;
-        constexpr int correct_rows = 256;  // the fused corrector's block (as the batched paths')
-        int corrected = 0;                 // particles [0, corrected) are corrected
-        std::fill(fx, fx + n, 0.0);
-        std::fill(fy, fy + n, 0.0);
-        if constexpr (rot) std::fill(tq, tq + n, 0.0);
+        int predicted = 0;  // the fused step: particles [0, predicted) are predicted
+        if (!cor.predict) {
+            std::fill(fx, fx + n, 0.0);
+            std::fill(fy, fy + n, 0.0);
+            if constexpr (rot) std::fill(tq, tq + n, 0.0);
+        }
         double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
-        double max_ov = 0.0, wfx = 0.0, wfy = 0.0;
+        double max_ov = 0.0, wfx = 0.0, wfy = 0.0, next_d2 = 0.0;
         int contacts = 0;
         PairInput q{};
-        for (int i = 0; i < n; ++i) {
-            const double xi = x[i], yi = y[i], ri = r[i];
-            q.vix = vx[i];
-            q.viy = vy[i];
-            q.wi = rot ? w[i] : 0.0;
-            if constexpr (Corr) {  // the springs' own velocities: only with the corrections
-                q.six = svx[i];
-                q.siy = svy[i];
-                q.swi = rot ? sw[i] : 0.0;
+        for (int i0 = 0; i0 < n; i0 += detail::block_rows) {
+            const int i1 = std::min(n, i0 + detail::block_rows);
+            // The fused step: this block's rows and their partners predicted (and their forces
+            // zeroed) before any row reads them (integrate.hpp).
+            detail::predict_ahead(cor, fx, fy, tq, rot, i0 / detail::block_rows, predicted);
+            for (int i = i0; i < i1; ++i) {
+                const double xi = x[i], yi = y[i], ri = r[i];
+                q.vix = vx[i];
+                q.viy = vy[i];
+                q.wi = rot ? w[i] : 0.0;
+                if constexpr (Corr) {  // the springs' own velocities: only with the corrections
+                    q.six = svx[i];
+                    q.siy = svy[i];
+                    q.swi = rot ? sw[i] : 0.0;
+                }
+                q.ri = ri;
+                double fxi = 0.0, fyi = 0.0, tqi = 0.0;
+                // Mobile partners: each pair once, Newton's third law.
+                const int k1 = ps[i + 1];
+                for (int k = ps[i]; k < k1; ++k) {
+                    const int j = pj[k];
+                    double& sx = hist ? hx[k] : no_spring_x;
+                    double& sy = hist ? hy[k] : no_spring_y;
+                    q.dx = xi - x[j];
+                    q.dy = yi - y[j];
+                    q.rj = r[j];
+                    q.rs = ri + q.rj;
+                    q.d2 = q.dx * q.dx + q.dy * q.dy;
+                    if (q.d2 >= q.rs * q.rs) {
+                        sx = sy = 0.0;  // not touching: the spring is forgotten
+                        continue;
+                    }
+                    q.mbar = pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
+                    if constexpr (law_needs_rstar<Law>) q.rstar = prstar[k];
+                    if constexpr (law_needs_pair_constants<Law>) {
+                        q.hertz_K = pK[k];
+                        q.hertz_eta = peta[k];
+                    }
+                    q.vjx = vx[j];
+                    q.vjy = vy[j];
+                    q.wj = rot ? w[j] : 0.0;
+                    if constexpr (Corr) {
+                        q.sjx = svx[j];
+                        q.sjy = svy[j];
+                        q.swj = rot ? sw[j] : 0.0;
+                    }
+                    const PairOutput o =
+                        detail::pair_force<Law, Corr, false>(pp, dt, lever_half, q, sx, sy);
+                    fxi += o.fx;
+                    fyi += o.fy;
+                    fx[j] -= o.fx;
+                    fy[j] -= o.fy;
+                    if constexpr (rot) {
+                        tqi -= o.ti;    // -l_i (n x F_t)
+                        tq[j] -= o.tj;  // -l_j (n x F_t): the same form for the partner
+                    }
+                    max_ov = o.overlap > max_ov ? o.overlap : max_ov;
+                    ++contacts;
+                }
+                // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0.
+                double wfxi = 0.0, wfyi = 0.0;
+                q.vjx = q.sjx = vwx;
+                q.vjy = q.sjy = vwy;
+                q.wj = q.swj = 0.0;
+                const int kw1 = ws[i + 1];
+                for (int k = ws[i]; k < kw1; ++k) {
+                    const int j = wjs[k];
+                    double& sx = hist ? gx[k] : no_spring_x;
+                    double& sy = hist ? gy[k] : no_spring_y;
+                    q.dx = xi - (wx[j] + ox);
+                    q.dy = yi - (wy[j] + oy);
+                    q.rj = wr[j];
+                    q.rs = ri + q.rj;
+                    q.d2 = q.dx * q.dx + q.dy * q.dy;
+                    if (q.d2 >= q.rs * q.rs) {
+                        sx = sy = 0.0;
+                        continue;
+                    }
+                    q.mbar = wmbar[k];
+                    if constexpr (law_needs_rstar<Law>) q.rstar = wrstar[k];
+                    if constexpr (law_needs_pair_constants<Law>) {
+                        q.hertz_K = wK[k];
+                        q.hertz_eta = weta[k];
+                    }
+                    const PairOutput o =
+                        detail::pair_force<Law, Corr, false>(pw, dt, lever_half, q, sx, sy);
+                    wfxi += o.fx;
+                    wfyi += o.fy;
+                    if constexpr (rot) tqi -= o.ti;
+                    max_ov = o.overlap > max_ov ? o.overlap : max_ov;
+                    ++contacts;
+                }
+                fx[i] += fxi + wfxi;
+                fy[i] += fyi + wfyi;
+                wfx -= wfxi;
+                wfy -= wfyi;
+                if constexpr (rot) tq[i] += tqi;
             }
-            q.ri = ri;
-            double fxi = 0.0, fyi = 0.0, tqi = 0.0;
-            // Mobile partners: each pair once, Newton's third law.
-            const int k1 = ps[i + 1];
-            for (int k = ps[i]; k < k1; ++k) {
-                const int j = pj[k];
-                double& sx = hist ? hx[k] : no_spring_x;
-                double& sy = hist ? hy[k] : no_spring_y;
-                q.dx = xi - x[j];
-                q.dy = yi - y[j];
-                q.rj = r[j];
-                q.rs = ri + q.rj;
-                q.d2 = q.dx * q.dx + q.dy * q.dy;
-                if (q.d2 >= q.rs * q.rs) {
-                    sx = sy = 0.0;  // not touching: the spring is forgotten
-                    continue;
-                }
-                q.mbar = pmbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
-                if constexpr (law_needs_rstar<Law>) q.rstar = prstar[k];
-                if constexpr (law_needs_pair_constants<Law>) {
-                    q.hertz_K = pK[k];
-                    q.hertz_eta = peta[k];
-                }
-                q.vjx = vx[j];
-                q.vjy = vy[j];
-                q.wj = rot ? w[j] : 0.0;
-                if constexpr (Corr) {
-                    q.sjx = svx[j];
-                    q.sjy = svy[j];
-                    q.swj = rot ? sw[j] : 0.0;
-                }
-                const PairOutput o =
-                    detail::pair_force<Law, Corr, false>(pp, dt, lever_half, q, sx, sy);
-                fxi += o.fx;
-                fyi += o.fy;
-                fx[j] -= o.fx;
-                fy[j] -= o.fy;
-                if constexpr (rot) {
-                    tqi -= o.ti;    // -l_i (n x F_t)
-                    tq[j] -= o.tj;  // -l_j (n x F_t): the same form for the partner
-                }
-                max_ov = o.overlap > max_ov ? o.overlap : max_ov;
-                ++contacts;
-            }
-            // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0.
-            double wfxi = 0.0, wfyi = 0.0;
-            q.vjx = q.sjx = vwx;
-            q.vjy = q.sjy = vwy;
-            q.wj = q.swj = 0.0;
-            const int kw1 = ws[i + 1];
-            for (int k = ws[i]; k < kw1; ++k) {
-                const int j = wjs[k];
-                double& sx = hist ? gx[k] : no_spring_x;
-                double& sy = hist ? gy[k] : no_spring_y;
-                q.dx = xi - (wx[j] + ox);
-                q.dy = yi - (wy[j] + oy);
-                q.rj = wr[j];
-                q.rs = ri + q.rj;
-                q.d2 = q.dx * q.dx + q.dy * q.dy;
-                if (q.d2 >= q.rs * q.rs) {
-                    sx = sy = 0.0;
-                    continue;
-                }
-                q.mbar = wmbar[k];
-                if constexpr (law_needs_rstar<Law>) q.rstar = wrstar[k];
-                if constexpr (law_needs_pair_constants<Law>) {
-                    q.hertz_K = wK[k];
-                    q.hertz_eta = weta[k];
-                }
-                const PairOutput o =
-                    detail::pair_force<Law, Corr, false>(pw, dt, lever_half, q, sx, sy);
-                wfxi += o.fx;
-                wfyi += o.fy;
-                if constexpr (rot) tqi -= o.ti;
-                max_ov = o.overlap > max_ov ? o.overlap : max_ov;
-                ++contacts;
-            }
-            fx[i] += fxi + wfxi;
-            fy[i] += fyi + wfyi;
-            wfx -= wfxi;
-            wfy -= wfyi;
-            if constexpr (rot) tq[i] += tqi;
-            // Particle i's force is final (later rows never name it) and nothing later reads
-            // its state: the corrector, fused (integrate.hpp), once per block of rows.
-            if (i + 1 - corrected == correct_rows || i + 1 == n) {
-                detail::correct_block(cor, fx, fy, tq, rot, corrected, i + 1);
-                corrected = i + 1;
-            }
+            // The block's forces are final (later rows never name its particles) and nothing
+            // later reads their state: the corrector, fused (integrate.hpp).
+            next_d2 =
+                detail::max_or_nan(next_d2, detail::correct_block(cor, fx, fy, tq, rot, i0, i1));
         }
-        return {max_ov, wfx, wfy, contacts};
+        return {max_ov, wfx, wfy, contacts, next_d2};
     }
 };
 
-void detail::correct_block(const CorrectArgs& c, const double* fx, const double* fy,
-                           const double* tq, bool rot, int i0, int i1) {
+double detail::correct_block(const CorrectArgs& c, const double* fx, const double* fy,
+                             const double* tq, bool rot, int i0, int i1) {
     const std::size_t n = i1 > i0 ? std::size_t(i1 - i0) : 0;
-    if (n == 0) return;
+    if (n == 0 || c.scheme == CorrectArgs::none) return 0.0;
     if (c.scheme == CorrectArgs::gear4) {
         gear_correct_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.x + i0, c.vx + i0, c.x2 + i0,
                           c.x3 + i0, c.x4 + i0);
@@ -468,6 +542,36 @@ void detail::correct_block(const CorrectArgs& c, const double* fx, const double*
         verlet_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.vy + i0, nullptr);
         if (rot) verlet_axis(n, c.dt, 0.0, tq + i0, c.inv_I + i0, c.w + i0, nullptr);
     }
+    if (!c.next_displacement) return 0.0;
+    if (c.scheme == CorrectArgs::gear4)
+        return next_displacement2_gear(n, c.dt, c.x + i0, c.y + i0, c.vx + i0, c.vy + i0, c.x2 + i0,
+                                       c.x3 + i0, c.x4 + i0, c.y2 + i0, c.y3 + i0, c.y4 + i0,
+                                       c.xref + i0, c.yref + i0);
+    return next_displacement2_verlet(n, c.dt, c.gx, c.gy, fx + i0, fy + i0, c.inv_m + i0, c.x + i0,
+                                     c.y + i0, c.vx + i0, c.vy + i0, c.xref + i0, c.yref + i0);
+}
+
+void detail::predict_block(const CorrectArgs& c, double* fx, double* fy, double* tq, bool rot,
+                           int j0, int j1) {
+    const std::size_t n = j1 > j0 ? std::size_t(j1 - j0) : 0;
+    if (n == 0) return;
+    auto at = [&](double* p) { return p ? p + j0 : nullptr; };
+    // The predict() pass's calls on [j0, j1).
+    if (c.scheme == CorrectArgs::gear4) {
+        gear_predict_axis(n, c.dt, c.x + j0, c.vx + j0, c.x2 + j0, c.x3 + j0, c.x4 + j0, at(c.mx));
+        gear_predict_axis(n, c.dt, c.y + j0, c.vy + j0, c.y2 + j0, c.y3 + j0, c.y4 + j0, at(c.my));
+        if (rot)
+            gear_predict_axis(n, c.dt, nullptr, c.w + j0, c.w2 + j0, c.w3 + j0, c.w4 + j0,
+                              at(c.mw));
+    } else if (c.scheme == CorrectArgs::verlet) {
+        verlet_axis(n, c.dt, c.gx, fx + j0, c.inv_m + j0, c.vx + j0, c.x + j0, at(c.mx));
+        verlet_axis(n, c.dt, c.gy, fy + j0, c.inv_m + j0, c.vy + j0, c.y + j0, at(c.my));
+        if (rot) verlet_axis(n, c.dt, 0.0, tq + j0, c.inv_I + j0, c.w + j0, nullptr, at(c.mw));
+    }
+    // Then the pass's forces start from zero (verlet's kick above read the last ones).
+    std::fill(fx + j0, fx + j1, 0.0);
+    std::fill(fy + j0, fy + j1, 0.0);
+    if (rot) std::fill(tq + j0, tq + j1, 0.0);
 }
 
 namespace {

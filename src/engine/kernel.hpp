@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "force_batch.hpp"
 #include "hopper/engine/system.hpp"
 
 namespace hopper::engine {
@@ -16,10 +17,13 @@ struct System::Kernel {
     // (NaN when the state is not finite). Loops use __restrict pointers (the columns never
     // alias) so that the compiler vectorizes them.
     virtual double predict(System& s) = 0;
-    // Computes forces and torques; returns the largest overlap of this evaluation. With
-    // `correct`, the integrator's correction (Gear corrector, verlet's closing half kick) is
-    // fused into the pass (integrate.hpp): the same bits as forces, then correct().
-    virtual double forces(System& s, bool correct) = 0;
+    // Computes forces and torques; returns the largest overlap of this evaluation and its other
+    // sums. With `correct`, the integrator's correction (Gear corrector, verlet's closing half
+    // kick) is fused into the pass (integrate.hpp): the same bits as forces, then correct();
+    // the sums then also hold the next step's largest squared displacement. With `predict` as
+    // well, the predictor too, a block ahead (the fused step): the same bits as predict(),
+    // forces, correct().
+    virtual detail::ForceSums forces(System& s, bool correct, bool predict) = 0;
     // The corrector as a separate pass (the fused form above gives the same bits; System::step
     // uses the fused one).
     virtual void correct(System& s) = 0;

@@ -7,6 +7,7 @@
 
 #include "columns.hpp"
 #include "hopper/engine/system.hpp"
+#include "integrate.hpp"
 
 namespace hopper::engine {
 
@@ -55,6 +56,7 @@ void bin_points(std::span<const double> xs, std::span<const double> ys, double x
 }  // namespace
 
 void System::rebuild() {
+    ahead_ = false;  // new order and reference positions: the next step predicts on its own
     if (!history_saved_) save_history();
     history_saved_ = false;
     remove_below_floor();
@@ -236,6 +238,16 @@ void System::pair_constants() {
             wmbar_[k] = 1.0 / inv_m_[i];
             wown_[k] = int(i);
         }
+    }
+    // What each block of the fused passes reads (CorrectArgs::reach, integrate.hpp).
+    constexpr int B = detail::block_rows;
+    block_reach_.assign((n + B - 1) / B, 0);
+    for (std::size_t b = 0; b < block_reach_.size(); ++b) {
+        const int i1 = std::min(int(n), int(b + 1) * B);
+        int reach = i1;
+        for (int k = pstart_[b * B]; k < pstart_[i1]; ++k)
+            reach = std::max(reach, pj_[k] + 1);
+        block_reach_[b] = reach;
     }
     // R* and the Hertz law's constants per entry (the same expressions as the law's, once per
     // rebuild instead of once per step): only for the laws that read them.

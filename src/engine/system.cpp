@@ -89,6 +89,7 @@ int System::add_particle(const Vec2& pos, double diameter, double mass, double i
     inv_I_.push_back(1.0 / inertia);
     id_.push_back(next_id_);
     ready_ = false;  // the integrator's history is (re)initialised at the next step
+    ahead_ = false;
     need_rebuild_ = true;
     return next_id_++;
 }
@@ -156,6 +157,7 @@ void System::set_velocity(int index, const Vec2& v, double omega) {
     vx_[index] = v.x();
     vy_[index] = v.y();
     w_[index] = omega;
+    ahead_ = false;  // the next displacement was computed from the old velocity
 }
 
 int System::index_of(int id) const {
@@ -179,7 +181,7 @@ void System::ensure_ready() {
     // The priming evaluation only provides accelerations: it must not advance the springs
     // (the first real step grows them by v_t dt), so they are put back afterwards.
     const std::vector<double> px = pxi_x_, py = pxi_y_, wxs = wxi_x_, wys = wxi_y_;
-    const double ov = kernel_->forces(*this, false);
+    const double ov = kernel_->forces(*this, false, false).max_overlap;
     pxi_x_ = px;
     pxi_y_ = py;
     wxi_x_ = wxs;
@@ -191,16 +193,33 @@ void System::ensure_ready() {
 
 void System::step() {
     ensure_ready();
+    const double wall_d = (wall_offset_ - wall_offset_ref_).norm();
     const auto t0 = Clock::now();
-    const double maxd2 = kernel_->predict(*this);
-    const auto t1 = Clock::now();
-    if (!(maxd2 <= std::numeric_limits<double>::max())) fail_nonfinite();
-    const double dmax = std::max(std::sqrt(maxd2), (wall_offset_ - wall_offset_ref_).norm());
-    if (need_rebuild_ || 2.0 * dmax > config_.skin) rebuild();
-    const auto t2 = Clock::now();
-    // Forces, and the corrector fused into the same pass (round 3, kernel.hpp): its time
-    // counts as the force pass's.
-    const double ov = kernel_->forces(*this, true);
+    detail::ForceSums sums;
+    auto t1 = t0, t2 = t0;
+    // The fused step (round 3, docs/performance.md): when the last step's corrector says that
+    // the predicted positions need no rebuild (the test below, on the same numbers), the
+    // predictor runs inside the force pass, a block ahead of the rows that read it; else the
+    // separate predictor, the rebuild if needed, then the pass. The same bits either way.
+    const bool fused = fused_step_ && ahead_ && !need_rebuild_ &&
+                       ahead_d2_ <= std::numeric_limits<double>::max() &&
+                       !(2.0 * std::max(std::sqrt(ahead_d2_), wall_d) > config_.skin);
+    if (fused) {
+        sums = kernel_->forces(*this, true, true);  // the predictor's time counts as forces
+    } else {
+        const double maxd2 = kernel_->predict(*this);
+        t1 = Clock::now();
+        if (!(maxd2 <= std::numeric_limits<double>::max())) fail_nonfinite();
+        const double dmax = std::max(std::sqrt(maxd2), wall_d);
+        if (need_rebuild_ || 2.0 * dmax > config_.skin) rebuild();
+        t2 = Clock::now();
+        // Forces, and the corrector fused into the same pass (round 3, kernel.hpp): its time
+        // counts as the force pass's.
+        sums = kernel_->forces(*this, true, false);
+    }
+    ahead_ = true;
+    ahead_d2_ = sums.next_displacement2;
+    const double ov = sums.max_overlap;
     const auto t3 = Clock::now();
     time_ += config_.dt;
     check_overlap(ov);

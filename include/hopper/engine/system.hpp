@@ -155,6 +155,11 @@ class System {
     // Switches the force pass (bench_engine --paths compares them on one trajectory; the bits
     // do not change). ConfigError if this CPU cannot run it.
     void set_kernel(KernelPath p);
+    // The fused step (on by default; docs/performance.md): off, every step runs the predictor
+    // as a pass of its own. The bits do not change (test_kernel_paths); for tests and
+    // bench_engine --separate.
+    void set_fused_step(bool on) { fused_step_ = on; }
+    bool fused_step() const { return fused_step_; }
     // Candidate pairs in the neighbour list (mobile-mobile, mobile-wall).
     std::int64_t pair_count() const { return static_cast<std::int64_t>(pj_.size()); }
     std::int64_t wall_pair_count() const { return static_cast<std::int64_t>(wj_.size()); }
@@ -196,6 +201,14 @@ class System {
     bool history_saved_ = false;  // save_history() already ran for the coming rebuild
     bool history_ = false;        // keep tangential springs (k_t > 0 and mu > 0)
     int next_id_ = 0;
+    // The fused step (docs/performance.md, "The fused step"): the last step's corrector also
+    // computed the largest squared displacement the next predictor will give (ahead_d2_); while
+    // nothing else changed the state since (ahead_), a step that needs no rebuild predicts
+    // inside its force pass instead of in a pass of its own. Not part of a checkpoint: a
+    // restored System takes the separate passes once (the same bits).
+    bool ahead_ = false;
+    double ahead_d2_ = 0.0;
+    bool fused_step_ = true;
 
     // Mobile particle columns.
     std::vector<double> x_, y_, vx_, vy_, w_, fx_, fy_, tq_;
@@ -224,6 +237,9 @@ class System {
     std::vector<double> prstar_, wrstar_, phk_, whk_, pheta_, wheta_;
     // The mobile particle each list entry belongs to (the batched force pass loops over entries).
     std::vector<int> pown_, wown_;
+    // Per block of detail::block_rows rows: one past the largest particle index its rows read
+    // (its own and their partners'), for the fused step's predictor (integrate.hpp).
+    std::vector<int> block_reach_;
     // Cell grid for mobile particles (rebuilt with the list) and for walls (when walls change).
     double cell_size_ = 0.0, grid_x0_ = 0.0, grid_y0_ = 0.0;
     int grid_nx_ = 0, grid_ny_ = 0;
