@@ -39,14 +39,13 @@ void CheckpointAccess::save(const System& s, StateWriter& w) {
     w.put<std::uint8_t>(s.history_);
     w.put(s.next_id_);
     for (const auto* c :
-         {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,    &s.fy_,     &s.tq_,
-          &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,    &s.x4_,     &s.y2_,
-          &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,   &s.wx_,
-          &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.hist_x_, &s.hist_y_})
+         {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,   &s.fy_,   &s.tq_,
+          &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,   &s.x4_,   &s.y2_,
+          &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_, &s.yref_, &s.wx_,
+          &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
         w.put_vector(*c);
-    for (const auto* c :
-         {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_, &s.cell_of_,
-          &s.order_, &s.wcell_start_, &s.wcell_items_, &s.hist_start_, &s.hist_partner_})
+    for (const auto* c : {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_,
+                          &s.cell_of_, &s.order_, &s.wcell_start_, &s.wcell_items_})
         w.put_vector(*c);
     put_vec2(w, s.wall_offset_ref_);
     put_vec2(w, s.wall_offset_);
@@ -92,15 +91,13 @@ void CheckpointAccess::restore(System& s, StateReader& r) {
             std::string(history ? "on" : "off") + ", this realization has them " +
             (s.history_ ? "on" : "off") + ")");
     s.next_id_ = r.get<int>();
-    for (auto* c :
-         {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,    &s.fy_,     &s.tq_,
-          &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,    &s.x4_,     &s.y2_,
-          &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,   &s.wx_,
-          &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.hist_x_, &s.hist_y_})
+    for (auto* c : {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,   &s.fy_,   &s.tq_,
+                    &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,   &s.x4_,   &s.y2_,
+                    &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_, &s.yref_, &s.wx_,
+                    &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
         r.get_vector(*c);
-    for (auto* c :
-         {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_, &s.cell_of_,
-          &s.order_, &s.wcell_start_, &s.wcell_items_, &s.hist_start_, &s.hist_partner_})
+    for (auto* c : {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_,
+                    &s.cell_of_, &s.order_, &s.wcell_start_, &s.wcell_items_})
         r.get_vector(*c);
     s.wall_offset_ref_ = get_vec2(r);
     s.wall_offset_ = get_vec2(r);
@@ -186,10 +183,10 @@ void CheckpointAccess::check_invariants(const System& s) {
     if (s.ready_ && (s.xref_.size() != n || s.yref_.size() != n))
         inconsistent("reference positions of another length than the particle columns");
     // Finite values; sizes, masses and inertias positive.
-    for (const auto* c : {&s.x_,     &s.y_,     &s.vx_,    &s.vy_,    &s.w_,      &s.fx_,    &s.fy_,
-                          &s.tq_,    &s.x2_,    &s.x3_,    &s.x4_,    &s.y2_,     &s.y3_,    &s.y4_,
-                          &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,   &s.wx_,    &s.wy_,
-                          &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.hist_x_, &s.hist_y_})
+    for (const auto* c :
+         {&s.x_,    &s.y_,  &s.vx_, &s.vy_,    &s.w_,     &s.fx_,    &s.fy_,   &s.tq_, &s.x2_,
+          &s.x3_,   &s.x4_, &s.y2_, &s.y3_,    &s.y4_,    &s.w2_,    &s.w3_,   &s.w4_, &s.xref_,
+          &s.yref_, &s.wx_, &s.wy_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
         if (!all_finite(*c)) inconsistent("a non-finite position, velocity, force or spring");
     for (const auto* c : {&s.r_, &s.m_, &s.inv_m_, &s.inv_I_, &s.wr_})
         if (!all_positive(*c)) inconsistent("a radius, mass or inertia that is not positive");
@@ -226,11 +223,9 @@ void CheckpointAccess::check_invariants(const System& s) {
         (s.pxi_x_.size() != s.pj_.size() || s.pxi_y_.size() != s.pj_.size() ||
          s.wxi_x_.size() != s.wj_.size() || s.wxi_y_.size() != s.wj_.size()))
         inconsistent("tangential springs of another length than the neighbour list");
-    // The springs saved across a rebuild (read at the next rebuild when history_saved_).
-    if (!valid_starts(s.hist_start_, s.hist_start_.empty() ? 0 : s.hist_start_.size() - 1,
-                      s.hist_partner_.size()) ||
-        s.hist_x_.size() != s.hist_partner_.size() || s.hist_y_.size() != s.hist_partner_.size())
-        inconsistent("saved springs out of order or out of range");
+    // Springs are carried across a rebuild inside it (System::save_history), never between
+    // steps: a state cannot hold them half way.
+    if (s.history_saved_) inconsistent("springs saved for a rebuild that has not run");
     // The wall grid, used until the walls change.
     if (!s.walls_changed_ && nw > 0) {
         const std::int64_t cells = std::int64_t(s.wgrid_nx_) * std::int64_t(s.wgrid_ny_);

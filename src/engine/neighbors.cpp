@@ -96,6 +96,7 @@ void System::remove_below_floor() {
                       &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_, &avx_, &avy_,   &aw_})
         detail::compact(*col, keep);
     detail::compact(id_, keep);
+    if (carry_) detail::compact(carry_old_, keep);  // the springs' old indices follow
 }
 
 void System::build_wall_grid(double cutoff) {
@@ -158,6 +159,7 @@ void System::permute_by_cell(double cutoff) {
                       &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_, &avx_, &avy_,   &aw_})
         detail::permute(*col, order_, scratch_);
     detail::permute(id_, order_, iscratch_);
+    if (carry_) detail::permute(carry_old_, order_, iscratch_);  // the springs' old indices
     // cell_of_ in the new order is non-decreasing; rebuild it from the starts.
     for (int c = 0; c < ncell; ++c)
         for (int i = cell_start_[c]; i < cell_start_[c + 1]; ++i)
@@ -280,42 +282,31 @@ void System::pair_constants() {
     }
 }
 
-// Contact springs survive rebuilds keyed by the persistent ids of the pair: saved grouped by
-// owner (the smaller id for two mobile particles, the mobile one against a wall), restored by a
-// short scan of the owner's few entries. O(pairs), no sorting, no maps.
+// Contact springs survive rebuilds (round 3, docs/performance.md, phase 6): the list before the
+// rebuild is moved aside whole (no copy), and each entry of the new list finds its pair in the
+// old one through the particles' old indices (the compaction's and the cell order's
+// permutations composed): a pair of particles was listed in the row of the one earlier in the
+// old cell order, a particle-wall pair in the particle's row, so a short scan of one old row
+// finds it. O(pairs); no sorting, no maps, nothing sized by the ids ever issued.
 void System::save_history() {
-    hist_start_.assign(next_id_ + 1, 0);
-    hist_partner_.clear();
-    hist_x_.clear();
-    hist_y_.clear();
-    if (!history_ || pstart_.size() != x_.size() + 1) return;
     const std::size_t n = x_.size();
-    auto each_spring = [&](auto&& fn) {
-        for (std::size_t i = 0; i < n; ++i) {
-            for (int k = pstart_[i]; k < pstart_[i + 1]; ++k)
-                if (pxi_x_[k] != 0.0 || pxi_y_[k] != 0.0) {
-                    const int a = id_[i], b = id_[pj_[k]];
-                    fn(std::min(a, b), std::max(a, b), pxi_x_[k], pxi_y_[k]);
-                }
-            for (int k = wstart_[i]; k < wstart_[i + 1]; ++k)
-                if (wxi_x_[k] != 0.0 || wxi_y_[k] != 0.0)
-                    fn(id_[i], wid_[wj_[k]], wxi_x_[k], wxi_y_[k]);
-        }
-    };
-    each_spring([&](int owner, int, double, double) { ++hist_start_[owner + 1]; });
-    for (int k = 0; k < next_id_; ++k)
-        hist_start_[k + 1] += hist_start_[k];
-    const int total = hist_start_[next_id_];
-    hist_partner_.resize(total);
-    hist_x_.resize(total);
-    hist_y_.resize(total);
-    std::vector<int> fill(hist_start_.begin(), hist_start_.end() - 1);
-    each_spring([&](int owner, int partner, double sx, double sy) {
-        const int at = fill[owner]++;
-        hist_partner_[at] = partner;
-        hist_x_[at] = sx;
-        hist_y_[at] = sy;
-    });
+    // Only a list that matches the columns is carried (not after add_particle: ensure_ready
+    // starts the springs, like the integrator's history, afresh).
+    carry_ = history_ && pstart_.size() == n + 1 && pxi_x_.size() == pj_.size() &&
+             wxi_x_.size() == wj_.size();
+    if (!carry_) return;
+    old_pstart_.swap(pstart_);
+    old_pj_.swap(pj_);
+    old_wstart_.swap(wstart_);
+    old_wj_.swap(wj_);
+    old_hx_.swap(pxi_x_);
+    old_hy_.swap(pxi_y_);
+    old_gx_.swap(wxi_x_);
+    old_gy_.swap(wxi_y_);
+    carry_old_.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+        carry_old_[i] = int(i);
+    wall_old_.clear();
 }
 
 void System::restore_history() {
@@ -324,30 +315,38 @@ void System::restore_history() {
         pxi_y_.clear();
         wxi_x_.clear();
         wxi_y_.clear();
+        carry_ = false;
         return;
     }
     pxi_x_.assign(pj_.size(), 0.0);
     pxi_y_.assign(pj_.size(), 0.0);
     wxi_x_.assign(wj_.size(), 0.0);
     wxi_y_.assign(wj_.size(), 0.0);
-    if (hist_partner_.empty()) return;
-    auto lookup = [&](int owner, int partner, double& sx, double& sy) {
-        if (owner + 1 >= int(hist_start_.size())) return;
-        for (int k = hist_start_[owner]; k < hist_start_[owner + 1]; ++k)
-            if (hist_partner_[k] == partner) {
-                sx = hist_x_[k];
-                sy = hist_y_[k];
-                return;
-            }
-    };
+    if (!carry_) return;
+    carry_ = false;
+    const int* old = carry_old_.data();
     const std::size_t n = x_.size();
     for (std::size_t i = 0; i < n; ++i) {
+        const int a = old[i];
         for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
-            const int a = id_[i], b = id_[pj_[k]];
-            lookup(std::min(a, b), std::max(a, b), pxi_x_[k], pxi_y_[k]);
+            const int b = old[pj_[k]];
+            const int lo = std::min(a, b), hi = std::max(a, b);
+            for (int m = old_pstart_[lo]; m < old_pstart_[lo + 1]; ++m)
+                if (old_pj_[m] == hi) {
+                    pxi_x_[k] = old_hx_[m];
+                    pxi_y_[k] = old_hy_[m];
+                    break;
+                }
         }
-        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k)
-            lookup(id_[i], wid_[wj_[k]], wxi_x_[k], wxi_y_[k]);
+        for (int k = wstart_[i]; k < wstart_[i + 1]; ++k) {
+            const int wb = wall_old_.empty() ? wj_[k] : wall_old_[wj_[k]];
+            for (int m = old_wstart_[a]; m < old_wstart_[a + 1]; ++m)
+                if (old_wj_[m] == wb) {
+                    wxi_x_[k] = old_gx_[m];
+                    wxi_y_[k] = old_gy_[m];
+                    break;
+                }
+        }
     }
 }
 

@@ -108,12 +108,13 @@ int System::add_wall(const Vec2& pos, double diameter) {
 
 void System::remove_walls(std::span<const int> ids) {
     if (ids.empty()) return;
-    save_history();  // wall indices change: carry springs over by id
+    save_history();  // wall indices change: the springs are carried by the walls' old indices
     history_saved_ = true;
     std::vector<int> keep;
     keep.reserve(wid_.size());
     for (std::size_t k = 0; k < wid_.size(); ++k)
         if (std::find(ids.begin(), ids.end(), wid_[k]) == ids.end()) keep.push_back(int(k));
+    if (carry_) wall_old_ = keep;  // new wall index -> old one
     detail::compact(wx_, keep);
     detail::compact(wy_, keep);
     detail::compact(wr_, keep);

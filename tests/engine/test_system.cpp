@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -137,6 +138,68 @@ TEST(Discard, TakesParticlesOutUnreportedAndLeavesTheRestAlone) {
         EXPECT_NEAR(s.position(i).y(), 1.0 - 0.5 * g * t * t, 1e-12);
         EXPECT_TRUE(s.take_removals().empty());
     }
+}
+
+// Round 3 (docs/performance.md, phase 6): the tangential springs are carried across a rebuild
+// by the particles' old indices, through the removal's compaction and the new cell order. A
+// loaded packing in the box of SettledColumn, with three disks falling freely outside it (far
+// below it after 0.4 s: the first in cell order); taking them out rebuilds the list with every
+// other particle's index shifted and re-sorted. They touch nothing, so every contact and its
+// spring must survive: the elastic energy (normal and spring parts, summed in the new order)
+// agrees to round-off, and the springs' part of it is far above that.
+TEST(Springs, SurviveARebuildThatCompactsAndReorders) {
+    const ContactParams cp = contact_params(0.5, 0.5);
+    System s(system_config(Scheme::gear4, 50.0, cp, cp));
+    const double dw = d_large, W = 20.0 * d_large, H = 45.0 * d_large;
+    for (double x = -0.5 * dw; x <= W + 0.5 * dw + 1e-12; x += 0.5 * dw)
+        s.add_wall(Vec2(x, -0.5 * dw), dw);
+    for (double y = 0.0; y <= H; y += 0.5 * dw) {
+        s.add_wall(Vec2(-0.5 * dw, y), dw);
+        s.add_wall(Vec2(W + 0.5 * dw, y), dw);
+    }
+    std::vector<int> outside;
+    for (int k = 0; k < 3; ++k)
+        outside.push_back(add_disk(s, Vec2(-10.0 * dw - 2.0 * k * dw, 5.0 * dw), d_small));
+    std::mt19937_64 gen(7);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const double a = 1.05 * d_large;
+    const int per_row = int(W / a);
+    for (int k = 0; k < 300; ++k) {
+        const double d = U(gen) < 0.62 ? d_small : d_large;
+        add_disk(s, Vec2((k % per_row + 0.5) * a, (k / per_row + 0.5) * a + 0.5 * d_large), d);
+    }
+    s.run(std::int64_t(0.4 / s.dt()));
+    for (int id : outside)
+        ASSERT_LT(s.index_of(id), 3) << "the falling disks must come first in cell order";
+    const double e0 = s.elastic_energy();
+    const int n0 = s.contact_count();
+    s.discard_particles(outside);
+    ASSERT_EQ(s.mobile_count(), 300);
+    const double e1 = s.elastic_energy();
+    // The springs' share: the elastic energy minus its normal part, k_n x^2 / 2 per contact.
+    double normal = 0.0;
+    const auto wid = s.wall_ids();
+    for (const auto& [a_id, b_id] : s.contacts_from_list()) {
+        const int i = s.index_of(a_id);
+        const int j = s.index_of(b_id);
+        Vec2 pj;
+        double rj;
+        if (j >= 0) {
+            pj = s.position(j);
+            rj = s.radius(j);
+        } else {
+            const auto w = std::size_t(std::find(wid.begin(), wid.end(), b_id) - wid.begin());
+            pj = Vec2(s.wall_x()[w], s.wall_y()[w]) + s.wall_offset();
+            rj = s.wall_r()[w];
+        }
+        const double x = s.radius(i) + rj - (s.position(i) - pj).norm();
+        normal += 0.5 * cp.k_n * x * x;
+    }
+    std::printf("[ measured ] elastic energy %.17g J before, %.17g J after (%d contacts); "
+                "springs %.3g J\n",
+                e0, e1, n0, e1 - normal);
+    EXPECT_NEAR(e1, e0, 1e-12 * e0);
+    EXPECT_GT(e1 - normal, 1e-4 * e0) << "the springs must hold energy for the test to bite";
 }
 
 // The energy observables on a state computed by hand: disk a pressed into a wall disk below it

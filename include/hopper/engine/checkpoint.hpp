@@ -33,7 +33,8 @@
 
 namespace hopper::engine {
 
-inline constexpr std::uint32_t state_format_version = 1;
+// 2 (round 3): the springs saved across a rebuild (by id) are no longer part of the state.
+inline constexpr std::uint32_t state_format_version = 2;
 
 // Little-endian byte buffer writer/reader for the state (fixed-width values, vectors as a
 // 64-bit count followed by the elements), on core::ByteWriter and core::ByteReader.

@@ -248,9 +248,14 @@ class System {
     int wgrid_nx_ = 0, wgrid_ny_ = 0;
     std::vector<int> wcell_start_, wcell_items_;
     double r_max_ = 0.0, wr_max_ = 0.0;
-    // Contact history saved across a rebuild, grouped by owner id (CSR).
-    std::vector<int> hist_start_, hist_partner_;
-    std::vector<double> hist_x_, hist_y_;
+    // The springs carried across a rebuild (round 3, docs/performance.md): the list before it,
+    // moved aside (old_*), and for every particle of the new list its index in the old one
+    // (carry_old_; walls: wall_old_, empty while the walls keep their indices). Transient: set
+    // by save_history(), read by restore_history() in the same rebuild (carry_), never part of
+    // a checkpoint.
+    bool carry_ = false;
+    std::vector<int> old_pstart_, old_pj_, old_wstart_, old_wj_, carry_old_, wall_old_;
+    std::vector<double> old_hx_, old_hy_, old_gx_, old_gy_;
     std::vector<double> scratch_;
     std::vector<int> iscratch_;
     // Second velocity set when contact_corrections is on: verlet, velocities extrapolated to the
