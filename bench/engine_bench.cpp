@@ -3,13 +3,14 @@
 //
 //   bench_engine [--repeats R] [--steps K] [--particles N] [--full] [--skips] [--fields]
 //                [--csv FILE] [--scheme gear4|verlet] [--delta D] [--kernel PATH]
-//                [--corrections] [--paths] [--separate] [--lammps RUN_SH [--core C]]
+//                [--corrections] [--paths] [--fusion F] [--lammps RUN_SH [--core C]]
 //
 //   --corrections  integrator.contact_corrections on (docs/accuracy.md)
 //   --skin S  integrator.skin (Verlet skin in units of d_small; default 0.4)
 //   --kernel  force path: auto (default), reference, baseline, avx2, avx512 (same bits)
 //   --paths   every force path this CPU has, compared on one trajectory (CPU time per step)
-//   --separate  the fused step off: the predictor as a pass of its own (same bits)
+//   --fusion  none (default), corrector or step: the integrator's passes around the force pass
+//             (system.hpp, StepFusion; same bits)
 //   --lammps  side by side with LAMMPS: ../shared/reference/lammps-hopper/run.sh and this
 //             engine alternate on core C (default 0), R pairs per scene; prints the ratio table
 //   --full    also run the discharge to the end (the wall time of one whole realization)
@@ -61,7 +62,7 @@ Scheme g_scheme = Scheme::gear4;
 double g_delta = 50.0;
 double g_skin = -1.0;  // --skin: integrator.skin (units of d_small); < 0: the default
 bool g_corrections = false;
-bool g_separate = false;
+StepFusion g_fusion = StepFusion::none;
 KernelPath g_kernel = KernelPath::automatic;
 
 SceneParams full_scene(int particles) {
@@ -358,8 +359,8 @@ int main(int argc, char** argv) {
             core = std::stoi(next());
         else if (arg == "--paths")
             paths = true;
-        else if (arg == "--separate")
-            g_separate = true;
+        else if (arg == "--fusion")
+            g_fusion = parse_step_fusion(next());
         else if (arg == "--kernel")
             g_kernel = parse_kernel_path(next());
         else if (arg == "--scheme")
@@ -376,7 +377,7 @@ int main(int argc, char** argv) {
                 "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
                 "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] [--skin S] "
                 "[--corrections] [--kernel auto|reference|baseline|avx2|avx512] [--paths] "
-                "[--separate] "
+                "[--fusion none|corrector|step] "
                 "[--lammps RUN_SH [--core C]]\n");
             return 2;
         }
@@ -399,9 +400,9 @@ int main(int argc, char** argv) {
     hooks.kernel = g_kernel;
     Realization run(full_scene(particles), 1, hooks);
     System& sys = run.system();
-    sys.set_fused_step(!g_separate);
-    std::printf("force kernel: %s, %s step\n", to_string(sys.kernel_path()).c_str(),
-                g_separate ? "separate" : "fused");
+    sys.set_step_fusion(g_fusion);
+    std::printf("force kernel: %s, step fusion: %s\n", to_string(sys.kernel_path()).c_str(),
+                to_string(g_fusion).c_str());
     auto t0 = Clock::now();
     run.settle();
     const double settle_wall = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -154,22 +154,27 @@ double max_displacement2(std::size_t n, const double* __restrict x, const double
     return bad ? std::numeric_limits<double>::quiet_NaN() : maxd2;
 }
 
-// The largest squared displacement from (xr, yr) of the positions the next step's predictor
-// will give (the fused step, integrate.hpp): the predictor's own expressions (gear_predict_loop,
-// verlet_loop), so the same bits as its pass followed by max_displacement2, without storing them.
+// The corrector on x and y at once, and the largest squared displacement from (xr, yr) of the
+// positions that the next step's predictor will give (the fused step, integrate.hpp): per
+// element the expressions of gear_correct_loop (twice), gear_predict_loop and
+// max_displacement2, so the same bits as those passes, in one pass and without storing the
+// prediction. NaN if a position is not finite.
 HOPPER_ISA_CLONES
-double next_displacement2_gear(std::size_t n, double dt, const double* __restrict x,
-                               const double* __restrict y, const double* __restrict vx,
-                               const double* __restrict vy, const double* __restrict x2,
-                               const double* __restrict x3, const double* __restrict x4,
-                               const double* __restrict y2, const double* __restrict y3,
-                               const double* __restrict y4, const double* __restrict xr,
-                               const double* __restrict yr) {
+double gear_correct_xy_next(std::size_t n, double dt, double gx, double gy,
+                            const double* __restrict fx, const double* __restrict fy,
+                            const double* __restrict inv_m, double* __restrict x,
+                            double* __restrict vx, double* __restrict x2, double* __restrict x3,
+                            double* __restrict x4, double* __restrict y, double* __restrict vy,
+                            double* __restrict y2, double* __restrict y3, double* __restrict y4,
+                            const double* __restrict xr, const double* __restrict yr) {
     constexpr double inf = std::numeric_limits<double>::infinity();
+    const double h = 0.5 * dt * dt, inv_dt = 1.0 / dt;
     double maxd2 = 0.0;
     int bad = 0;
 #pragma omp simd reduction(max : maxd2) reduction(| : bad)
     for (std::size_t i = 0; i < n; ++i) {
+        detail::gear_correct_element<true>(i, h, inv_dt, gx, fx, inv_m, x, vx, x2, x3, x4);
+        detail::gear_correct_element<true>(i, h, inv_dt, gy, fy, inv_m, y, vy, y2, y3, y4);
         const double px = x[i] + (dt * vx[i] + x2[i] + x3[i] + x4[i]);
         const double py = y[i] + (dt * vy[i] + y2[i] + y3[i] + y4[i]);
         const double dx = px - xr[i], dy = py - yr[i];
@@ -180,22 +185,28 @@ double next_displacement2_gear(std::size_t n, double dt, const double* __restric
     return bad ? std::numeric_limits<double>::quiet_NaN() : maxd2;
 }
 
+// Verlet's closing half kick on x and y, and the next step's largest squared displacement (its
+// opening kick with the same forces, then the drift): the expressions of verlet_loop and
+// max_displacement2.
 HOPPER_ISA_CLONES
-double next_displacement2_verlet(std::size_t n, double dt, double gx, double gy,
-                                 const double* __restrict fx, const double* __restrict fy,
-                                 const double* __restrict inv_m, const double* __restrict x,
-                                 const double* __restrict y, const double* __restrict vx,
-                                 const double* __restrict vy, const double* __restrict xr,
-                                 const double* __restrict yr) {
+double verlet_close_xy_next(std::size_t n, double dt, double gx, double gy,
+                            const double* __restrict fx, const double* __restrict fy,
+                            const double* __restrict inv_m, double* __restrict vx,
+                            double* __restrict vy, const double* __restrict x,
+                            const double* __restrict y, const double* __restrict xr,
+                            const double* __restrict yr) {
     constexpr double inf = std::numeric_limits<double>::infinity();
     const double hdt = 0.5 * dt;
     double maxd2 = 0.0;
     int bad = 0;
 #pragma omp simd reduction(max : maxd2) reduction(| : bad)
     for (std::size_t i = 0; i < n; ++i) {
-        const double ux = vx[i] + hdt * (fx[i] * inv_m[i] + gx);
-        const double uy = vy[i] + hdt * (fy[i] * inv_m[i] + gy);
-        const double dx = (x[i] + dt * ux) - xr[i], dy = (y[i] + dt * uy) - yr[i];
+        const double kx = hdt * (fx[i] * inv_m[i] + gx);
+        const double ky = hdt * (fy[i] * inv_m[i] + gy);
+        vx[i] += kx;
+        vy[i] += ky;
+        const double dx = (x[i] + dt * (vx[i] + kx)) - xr[i];
+        const double dy = (y[i] + dt * (vy[i] + ky)) - yr[i];
         const double d2 = dx * dx + dy * dy;
         maxd2 = d2 > maxd2 ? d2 : maxd2;
         bad |= d2 < inf ? 0 : 1;
@@ -324,8 +335,8 @@ struct KernelImpl final : System::Kernel {
             c.w3 = s.w3_.data();
             c.w4 = s.w4_.data();
         }
-        // The next step's displacement, for the fused step's rebuild test.
-        c.next_displacement = true;
+        // The next step's displacement, for StepFusion::step's rebuild test.
+        c.next_displacement = s.fusion_ == StepFusion::step;
         c.xref = s.xref_.data();
         c.yref = s.yref_.data();
         if (predict) {
@@ -528,27 +539,35 @@ double detail::correct_block(const CorrectArgs& c, const double* fx, const doubl
                              const double* tq, bool rot, int i0, int i1) {
     const std::size_t n = i1 > i0 ? std::size_t(i1 - i0) : 0;
     if (n == 0 || c.scheme == CorrectArgs::none) return 0.0;
+    double next = 0.0;
     if (c.scheme == CorrectArgs::gear4) {
-        gear_correct_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.x + i0, c.vx + i0, c.x2 + i0,
-                          c.x3 + i0, c.x4 + i0);
-        gear_correct_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.y + i0, c.vy + i0, c.y2 + i0,
-                          c.y3 + i0, c.y4 + i0);
+        if (c.next_displacement) {
+            next = gear_correct_xy_next(n, c.dt, c.gx, c.gy, fx + i0, fy + i0, c.inv_m + i0,
+                                        c.x + i0, c.vx + i0, c.x2 + i0, c.x3 + i0, c.x4 + i0,
+                                        c.y + i0, c.vy + i0, c.y2 + i0, c.y3 + i0, c.y4 + i0,
+                                        c.xref + i0, c.yref + i0);
+        } else {
+            gear_correct_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.x + i0, c.vx + i0, c.x2 + i0,
+                              c.x3 + i0, c.x4 + i0);
+            gear_correct_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.y + i0, c.vy + i0, c.y2 + i0,
+                              c.y3 + i0, c.y4 + i0);
+        }
         if (rot)
             gear_correct_axis(n, c.dt, 0.0, tq + i0, c.inv_I + i0, nullptr, c.w + i0, c.w2 + i0,
                               c.w3 + i0, c.w4 + i0);
-    } else if (c.scheme == CorrectArgs::verlet) {
+    } else {
         // Velocity Verlet: the closing half kick with the new forces.
-        verlet_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.vx + i0, nullptr);
-        verlet_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.vy + i0, nullptr);
+        if (c.next_displacement) {
+            next =
+                verlet_close_xy_next(n, c.dt, c.gx, c.gy, fx + i0, fy + i0, c.inv_m + i0, c.vx + i0,
+                                     c.vy + i0, c.x + i0, c.y + i0, c.xref + i0, c.yref + i0);
+        } else {
+            verlet_axis(n, c.dt, c.gx, fx + i0, c.inv_m + i0, c.vx + i0, nullptr);
+            verlet_axis(n, c.dt, c.gy, fy + i0, c.inv_m + i0, c.vy + i0, nullptr);
+        }
         if (rot) verlet_axis(n, c.dt, 0.0, tq + i0, c.inv_I + i0, c.w + i0, nullptr);
     }
-    if (!c.next_displacement) return 0.0;
-    if (c.scheme == CorrectArgs::gear4)
-        return next_displacement2_gear(n, c.dt, c.x + i0, c.y + i0, c.vx + i0, c.vy + i0, c.x2 + i0,
-                                       c.x3 + i0, c.x4 + i0, c.y2 + i0, c.y3 + i0, c.y4 + i0,
-                                       c.xref + i0, c.yref + i0);
-    return next_displacement2_verlet(n, c.dt, c.gx, c.gy, fx + i0, fy + i0, c.inv_m + i0, c.x + i0,
-                                     c.y + i0, c.vx + i0, c.vy + i0, c.xref + i0, c.yref + i0);
+    return next;
 }
 
 void detail::predict_block(const CorrectArgs& c, double* fx, double* fy, double* tq, bool rot,

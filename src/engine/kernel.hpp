@@ -25,7 +25,7 @@ struct System::Kernel {
     // forces, correct().
     virtual detail::ForceSums forces(System& s, bool correct, bool predict) = 0;
     // The corrector as a separate pass (the fused form above gives the same bits; System::step
-    // uses the fused one).
+    // uses this one with StepFusion::none, the default).
     virtual void correct(System& s) = 0;
     // Initialises the integrator's history from the current forces.
     virtual void prime(System& s) = 0;

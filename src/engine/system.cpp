@@ -69,6 +69,29 @@ void System::set_kernel(KernelPath p) {
     kernel_path_ = p == KernelPath::reference ? p : detail::resolve_kernel(p);
 }
 
+std::string to_string(StepFusion f) {
+    switch (f) {
+        case StepFusion::none:
+            return "none";
+        case StepFusion::corrector:
+            return "corrector";
+        case StepFusion::step:
+            return "step";
+    }
+    return "?";
+}
+
+StepFusion parse_step_fusion(const std::string& s) {
+    for (StepFusion f : {StepFusion::none, StepFusion::corrector, StepFusion::step})
+        if (s == to_string(f)) return f;
+    throw core::ConfigError("unknown step fusion '" + s + "': none, corrector or step");
+}
+
+void System::set_step_fusion(StepFusion f) {
+    fusion_ = f;
+    ahead_ = false;  // the look-ahead is computed only by the step form's corrector
+}
+
 int System::add_particle(const Vec2& pos, double diameter, double mass, double inertia,
                          const Vec2& vel, double omega) {
     if (!(diameter > 0.0 && mass > 0.0 && inertia > 0.0) || !pos.allFinite() || !vel.allFinite())
@@ -197,16 +220,17 @@ void System::step() {
     const double wall_d = (wall_offset_ - wall_offset_ref_).norm();
     const auto t0 = Clock::now();
     detail::ForceSums sums;
-    auto t1 = t0, t2 = t0;
-    // The fused step (round 3, docs/performance.md): when the last step's corrector says that
+    auto t1 = t0, t2 = t0, t3 = t0;  // the predictor, the rebuild, the force pass done
+    // StepFusion::step (round 3, docs/performance.md): when the last step's corrector says that
     // the predicted positions need no rebuild (the test below, on the same numbers), the
     // predictor runs inside the force pass, a block ahead of the rows that read it; else the
     // separate predictor, the rebuild if needed, then the pass. The same bits either way.
-    const bool fused = fused_step_ && ahead_ && !need_rebuild_ &&
-                       ahead_d2_ <= std::numeric_limits<double>::max() &&
-                       !(2.0 * std::max(std::sqrt(ahead_d2_), wall_d) > config_.skin);
-    if (fused) {
+    const bool look_ahead = fusion_ == StepFusion::step && ahead_ && !need_rebuild_ &&
+                            ahead_d2_ <= std::numeric_limits<double>::max() &&
+                            !(2.0 * std::max(std::sqrt(ahead_d2_), wall_d) > config_.skin);
+    if (look_ahead) {
         sums = kernel_->forces(*this, true, true);  // the predictor's time counts as forces
+        t3 = Clock::now();
     } else {
         const double maxd2 = kernel_->predict(*this);
         t1 = Clock::now();
@@ -214,16 +238,20 @@ void System::step() {
         const double dmax = std::max(std::sqrt(maxd2), wall_d);
         if (need_rebuild_ || 2.0 * dmax > config_.skin) rebuild();
         t2 = Clock::now();
-        // Forces, and the corrector fused into the same pass (round 3, kernel.hpp): its time
-        // counts as the force pass's.
-        sums = kernel_->forces(*this, true, false);
+        // With a fused form the corrector runs inside the force pass (its time counts as the
+        // force pass's); with none (the default) as a pass of its own.
+        const bool fused = fusion_ != StepFusion::none;
+        sums = kernel_->forces(*this, fused, false);
+        t3 = Clock::now();
+        if (!fused) {
+            kernel_->correct(*this);
+            phase_.integration += seconds_between(t3, Clock::now());
+        }
     }
-    ahead_ = true;
+    ahead_ = fusion_ == StepFusion::step;
     ahead_d2_ = sums.next_displacement2;
-    const double ov = sums.max_overlap;
-    const auto t3 = Clock::now();
     time_ += config_.dt;
-    check_overlap(ov);
+    check_overlap(sums.max_overlap);
     phase_.integration += seconds_between(t0, t1);
     phase_.neighbors += seconds_between(t1, t2);
     phase_.forces += seconds_between(t2, t3);

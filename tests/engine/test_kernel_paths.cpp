@@ -2,8 +2,8 @@
 // CPU can run (baseline, AVX2, AVX-512) run the same hopper through settling, the opening and
 // part of the discharge; the full particle state and the result must be identical, for every
 // contact law, both integrators, with and without the contact corrections and the lever arm.
-// Round 3: the fused step (the predictor inside the force pass) gives the bits of the separate
-// predictor pass.
+// Round 3: so do the fused arrangements of the integrator's passes (StepFusion: the corrector
+// inside the force pass, and the predictor too), on the reference and on the last batched path.
 
 #include <gtest/gtest.h>
 
@@ -39,11 +39,11 @@ struct State {
     RealizationResult result;
 };
 
-State run(const SceneParams& p, KernelPath path, bool fused = true) {
+State run(const SceneParams& p, KernelPath path, StepFusion fusion = StepFusion::none) {
     RunHooks hooks;
     hooks.kernel = path;
     Realization r(p, 7, hooks);
-    r.system().set_fused_step(fused);
+    r.system().set_step_fusion(fusion);
     r.settle();
     r.open();
     r.advance(0.4);
@@ -153,8 +153,11 @@ TEST(KernelPaths, EveryPathGivesTheReferenceBits) {
         ASSERT_GT(ref.result.exit_times.size(), 10u) << c.name;
         for (KernelPath path : paths)
             expect_identical(ref, run(c.p, path), c.name + ", " + to_string(path));
-        expect_identical(ref, run(c.p, KernelPath::reference, false),
-                         c.name + ", reference, predictor as a pass of its own");
+        for (StepFusion f : {StepFusion::corrector, StepFusion::step})
+            expect_identical(ref, run(c.p, KernelPath::reference, f),
+                             c.name + ", reference, fusion " + to_string(f));
+        expect_identical(ref, run(c.p, paths.back(), StepFusion::step),
+                         c.name + ", " + to_string(paths.back()) + ", fusion step");
     }
 }
 

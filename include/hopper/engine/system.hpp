@@ -32,6 +32,16 @@ enum class KernelPath { automatic, reference, baseline, avx2, avx512 };
 std::string to_string(KernelPath p);
 KernelPath parse_kernel_path(const std::string& s);  // "auto", "reference", ...; ConfigError
 
+// How the integrator's passes are arranged around the force pass (round 3, issue 25;
+// docs/performance.md, "Fused passes, measured"). Every form gives the same bits; the choice is
+// speed only. `none`: predictor, force pass and corrector as passes of their own (the default:
+// measured fastest on the scalar and AVX2 paths, even on AVX-512). `corrector`: the corrector
+// inside the force pass, block by block. `step`: that, and the predictor too, a block ahead of
+// the rows that read it, on steps that need no rebuild.
+enum class StepFusion { none, corrector, step };
+std::string to_string(StepFusion f);
+StepFusion parse_step_fusion(const std::string& s);  // "none", "corrector", "step"; ConfigError
+
 struct SystemConfig {
     double dt = 1e-5;  // s
     Scheme scheme = Scheme::verlet;
@@ -155,11 +165,10 @@ class System {
     // Switches the force pass (bench_engine --paths compares them on one trajectory; the bits
     // do not change). ConfigError if this CPU cannot run it.
     void set_kernel(KernelPath p);
-    // The fused step (on by default; docs/performance.md): off, every step runs the predictor
-    // as a pass of its own. The bits do not change (test_kernel_paths); for tests and
-    // bench_engine --separate.
-    void set_fused_step(bool on) { fused_step_ = on; }
-    bool fused_step() const { return fused_step_; }
+    // The arrangement of the integrator's passes (StepFusion; none by default). The bits do
+    // not change (test_kernel_paths); for tests and bench_engine --fusion.
+    void set_step_fusion(StepFusion f);
+    StepFusion step_fusion() const { return fusion_; }
     // Candidate pairs in the neighbour list (mobile-mobile, mobile-wall).
     std::int64_t pair_count() const { return static_cast<std::int64_t>(pj_.size()); }
     std::int64_t wall_pair_count() const { return static_cast<std::int64_t>(wj_.size()); }
@@ -201,14 +210,14 @@ class System {
     bool history_saved_ = false;  // save_history() already ran for the coming rebuild
     bool history_ = false;        // keep tangential springs (k_t > 0 and mu > 0)
     int next_id_ = 0;
-    // The fused step (docs/performance.md, "The fused step"): the last step's corrector also
-    // computed the largest squared displacement the next predictor will give (ahead_d2_); while
-    // nothing else changed the state since (ahead_), a step that needs no rebuild predicts
-    // inside its force pass instead of in a pass of its own. Not part of a checkpoint: a
-    // restored System takes the separate passes once (the same bits).
+    // StepFusion::step (docs/performance.md): the last step's corrector also computed the
+    // largest squared displacement the next predictor will give (ahead_d2_); while nothing else
+    // changed the state since (ahead_), a step that needs no rebuild predicts inside its force
+    // pass instead of in a pass of its own. Not part of a checkpoint: a restored System takes
+    // the separate predictor once (the same bits).
+    StepFusion fusion_ = StepFusion::none;
     bool ahead_ = false;
     double ahead_d2_ = 0.0;
-    bool fused_step_ = true;
 
     // Mobile particle columns.
     std::vector<double> x_, y_, vx_, vy_, w_, fx_, fy_, tq_;
