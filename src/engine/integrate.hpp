@@ -38,7 +38,7 @@ HOPPER_HOT_INLINE void gear_correct_element(std::size_t i, double h, double inv_
 inline constexpr int block_rows = 256;
 
 // What the fused integrator needs: the scheme (none: forces only, e.g. the priming evaluation)
-// and the System's columns. The fused step (round 3, docs/performance.md, "The fused step"):
+// and the System's columns. StepFusion::step (docs/performance.md, "Round 3, second session"):
 // with `predict`, the force pass also runs the predictor, a block ahead of the rows that read
 // the predicted state (`reach`), and zeroes the forces there; with `next_displacement` the
 // corrector also returns the largest squared displacement from (xref, yref) that the next

@@ -195,9 +195,10 @@ TEST(Springs, SurviveARebuildThatCompactsAndReorders) {
         const double x = s.radius(i) + rj - (s.position(i) - pj).norm();
         normal += 0.5 * cp.k_n * x * x;
     }
-    std::printf("[ measured ] elastic energy %.17g J before, %.17g J after (%d contacts); "
-                "springs %.3g J\n",
-                e0, e1, n0, e1 - normal);
+    std::printf(
+        "[ measured ] elastic energy %.17g J before, %.17g J after (%d contacts); "
+        "springs %.3g J\n",
+        e0, e1, n0, e1 - normal);
     EXPECT_NEAR(e1, e0, 1e-12 * e0);
     EXPECT_GT(e1 - normal, 1e-4 * e0) << "the springs must hold energy for the test to bite";
 }

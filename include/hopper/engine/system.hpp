@@ -33,7 +33,7 @@ std::string to_string(KernelPath p);
 KernelPath parse_kernel_path(const std::string& s);  // "auto", "reference", ...; ConfigError
 
 // How the integrator's passes are arranged around the force pass (round 3, issue 25;
-// docs/performance.md, "Fused passes, measured"). Every form gives the same bits; the choice is
+// docs/performance.md, "Round 3, second session"). Every form gives the same bits; the choice is
 // speed only. `none`: predictor, force pass and corrector as passes of their own (the default:
 // measured fastest on the scalar and AVX2 paths, even on AVX-512). `corrector`: the corrector
 // inside the force pass, block by block. `step`: that, and the predictor too, a block ahead of
