@@ -290,9 +290,12 @@ void System::pair_constants() {
 // finds it. O(pairs); no sorting, no maps, nothing sized by the ids ever issued.
 void System::save_history() {
     const std::size_t n = x_.size();
-    // Only a list that matches the columns is carried (not after add_particle: ensure_ready
-    // starts the springs, like the integrator's history, afresh).
-    carry_ = history_ && pstart_.size() == n + 1 && pxi_x_.size() == pj_.size() &&
+    // The list's rows are the particles it was built for; particles added since (the steady
+    // state's re-insertions) come after them and have no springs yet (old index -1). Requiring
+    // the row count to equal the grown particle count dropped every spring at each
+    // re-insertion (fixed on main in 9e7f4f9; test Springs.SurviveTheAdditionOfAParticle).
+    const std::size_t rows = pstart_.empty() ? 0 : pstart_.size() - 1;
+    carry_ = history_ && !pstart_.empty() && rows <= n && pxi_x_.size() == pj_.size() &&
              wxi_x_.size() == wj_.size();
     if (!carry_) return;
     old_pstart_.swap(pstart_);
@@ -305,7 +308,7 @@ void System::save_history() {
     old_gy_.swap(wxi_y_);
     carry_old_.resize(n);
     for (std::size_t i = 0; i < n; ++i)
-        carry_old_[i] = int(i);
+        carry_old_[i] = i < rows ? int(i) : -1;
     wall_old_.clear();
 }
 
@@ -328,8 +331,10 @@ void System::restore_history() {
     const std::size_t n = x_.size();
     for (std::size_t i = 0; i < n; ++i) {
         const int a = old[i];
+        if (a < 0) continue;  // added since the last list: no springs to carry
         for (int k = pstart_[i]; k < pstart_[i + 1]; ++k) {
             const int b = old[pj_[k]];
+            if (b < 0) continue;
             const int lo = std::min(a, b), hi = std::max(a, b);
             for (int m = old_pstart_[lo]; m < old_pstart_[lo + 1]; ++m)
                 if (old_pj_[m] == hi) {
