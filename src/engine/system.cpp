@@ -326,17 +326,21 @@ detail::ForceArgs System::force_args() {
     a.weta = wheta_.data();
     a.po = pown_.data();
     a.wo = wown_.data();
+    // Scratch of the force passes: columns with room for every entry of either list (a block
+    // uses the part of its own entries). The reference loop lists its touching entries in the
+    // index columns (kernel.cpp); the batched passes also keep their results per entry.
+    const std::size_t len = std::max(pj_.size(), wj_.size()) + 16;  // 16: slack for the
+                                                                    // 16-wide stores
+    if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
+    int* ib = batch_index_.data();
     if (kernel_path_ != KernelPath::reference) {
-        // Scratch of the batched passes: columns with room for every entry of either list
-        // (a block uses the part of its own entries).
-        const std::size_t len = std::max(pj_.size(), wj_.size()) + 16;  // 16: slack for the
-                                                                        // 16-wide stores
         if (batch_scratch_.size() < 7 * len) batch_scratch_.resize(7 * len);
-        if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
         double* db = batch_scratch_.data();
-        int* ib = batch_index_.data();
         a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len, db,          db + len,
                      db + 2 * len, db + 3 * len, db + 4 * len, db + 5 * len, db + 6 * len};
+    } else {
+        a.scratch = {ib,      ib + len, ib + 2 * len, ib + 3 * len, nullptr, nullptr,
+                     nullptr, nullptr,  nullptr,      nullptr,      nullptr};
     }
     return a;
 }
