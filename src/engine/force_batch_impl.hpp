@@ -8,6 +8,9 @@
 // in an AVX-512 object and merged by the linker with the baseline one would run AVX-512
 // instructions on any CPU.
 
+#include <bit>
+#include <cstdint>
+
 #include "force_batch.hpp"
 #include "pair_force.hpp"
 #if defined(__AVX512F__)
@@ -48,8 +51,12 @@ int touching(const ForceArgs& a, int k0, int k1) {
         const bool touch = !(dx * dx + dy * dy >= rs * rs);
         flag[k] = touch ? 1 : 0;
         if constexpr (Law::has_history) {
-            hx[k] = touch ? hx[k] : 0.0;  // not touching: the spring is forgotten
-            hy[k] = touch ? hy[k] : 0.0;
+            // Not touching: the spring is forgotten (+0.0 exactly, as a select gives), by a
+            // mask on the bits: where GCC does not vectorize the loop (the baseline build) it
+            // turns a select of a stored value into an unpredictable branch.
+            const std::uint64_t keep = std::uint64_t(0) - std::uint64_t(touch);
+            hx[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hx[k]) & keep);
+            hy[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hy[k]) & keep);
         }
     }
     int* __restrict entry = a.scratch.entry;
@@ -182,12 +189,15 @@ double evaluate(const ForceArgs& a, int m, double max_ov) {
     return max_ov;
 }
 
-// Pass 3 for the particles [i0, i1): sums the m results in the reference loop's order (per
-// particle: its mobile partners, then its walls; partners' shares as they come) into the
-// block's per-particle sums, and writes the new springs back to the list.
+// Pass 3 for the block of particles starting at i0: adds the m results in the reference loop's
+// order (per particle: its mobile partners, then its walls; partners' shares as they come) to
+// the block's per-particle sums (fxi, fyi, tqi: indexed by particle - i0, continuing from what
+// they hold), and writes the new springs back to the list. One flat loop over the results, no
+// branch per particle (round 3, third session: the row-by-row form's loop exits were as
+// unpredictable as the reference's touch test).
 template <class Law, bool Wall>
-void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fxi,
-                double* __restrict fyi, double* __restrict tqi) {
+void accumulate(const ForceArgs& a, int i0, int m, double* __restrict fxi, double* __restrict fyi,
+                double* __restrict tqi) {
     constexpr bool rot = Law::has_tangential;
     constexpr bool hist = Law::has_history;
     const int* __restrict entry = a.scratch.entry;
@@ -204,27 +214,21 @@ void accumulate(const ForceArgs& a, int i0, int i1, int m, double* __restrict fx
     double* __restrict fx = a.fx;
     double* __restrict fy = a.fy;
     double* __restrict tq = a.tq;
-    int t = 0;
-    for (int i = i0; i < i1; ++i) {
-        double sx = 0.0, sy = 0.0, st = tqi[i - i0];
-        for (; t < m && owner[t] == i; ++t) {
-            sx += sfx[t];
-            sy += sfy[t];
-            if constexpr (!Wall) {
-                const int j = partner[t];
-                fx[j] -= sfx[t];
-                fy[j] -= sfy[t];
-                if constexpr (rot) tq[j] -= stj[t];
-            }
-            if constexpr (rot) st -= sti[t];
-            if constexpr (hist) {
-                hx[entry[t]] = ssx[t];
-                hy[entry[t]] = ssy[t];
-            }
+    for (int t = 0; t < m; ++t) {
+        const int b = owner[t] - i0;
+        fxi[b] += sfx[t];
+        fyi[b] += sfy[t];
+        if constexpr (!Wall) {
+            const int j = partner[t];
+            fx[j] -= sfx[t];
+            fy[j] -= sfy[t];
+            if constexpr (rot) tq[j] -= stj[t];
         }
-        fxi[i - i0] = sx;
-        fyi[i - i0] = sy;
-        tqi[i - i0] = st;
+        if constexpr (rot) tqi[b] -= sti[t];
+        if constexpr (hist) {
+            hx[entry[t]] = ssx[t];
+            hy[entry[t]] = ssy[t];
+        }
     }
 }
 
@@ -244,7 +248,7 @@ ForceSums forces(const ForceArgs& a) {
     double max_ov = 0.0, wfx = 0.0, wfy = 0.0, next_d2 = 0.0;
     int contacts = 0, predicted = 0;
     double fxm[block_particles], fym[block_particles], tqm[block_particles];
-    double fxw[block_particles], fyw[block_particles], tqw[block_particles];
+    double fxw[block_particles], fyw[block_particles];
     for (int i0 = 0; i0 < a.n; i0 += block_particles) {
         const int i1 = i0 + block_particles < a.n ? i0 + block_particles : a.n;
         const int bi = i1 - i0;
@@ -254,15 +258,13 @@ ForceSums forces(const ForceArgs& a) {
         int m = touching<Law, false>(a, a.ps[i0], a.ps[i1]);
         max_ov = evaluate<Law, Corr, false>(a, m, max_ov);
         for (int t = 0; t < bi; ++t)
-            tqm[t] = 0.0;
-        accumulate<Law, false>(a, i0, i1, m, fxm, fym, tqm);
+            fxm[t] = fym[t] = tqm[t] = fxw[t] = fyw[t] = 0.0;
+        accumulate<Law, false>(a, i0, m, fxm, fym, tqm);
         contacts += m;
         // Wall partners: the torque continues from the mobile partners', as in the reference.
         m = touching<Law, true>(a, a.ws[i0], a.ws[i1]);
         max_ov = evaluate<Law, Corr, true>(a, m, max_ov);
-        for (int t = 0; t < bi; ++t)
-            tqw[t] = tqm[t];
-        accumulate<Law, true>(a, i0, i1, m, fxw, fyw, tqw);
+        accumulate<Law, true>(a, i0, m, fxw, fyw, tqm);
         contacts += m;
         for (int i = i0; i < i1; ++i) {
             const int t = i - i0;
@@ -270,7 +272,7 @@ ForceSums forces(const ForceArgs& a) {
             a.fy[i] += fym[t] + fyw[t];
             wfx -= fxw[t];
             wfy -= fyw[t];
-            if constexpr (rot) a.tq[i] += tqw[t];
+            if constexpr (rot) a.tq[i] += tqm[t];
         }
         // The block's forces are final (later blocks' rows never name its particles) and
         // nothing later reads their state: the corrector, fused (integrate.hpp; an ordinary
