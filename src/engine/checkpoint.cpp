@@ -72,6 +72,7 @@ void CheckpointAccess::save(const System& s, StateWriter& w) {
     w.put(s.max_overlap_seen_);
     w.put(s.contacts_);
     w.put(s.rebuilds_);
+    // The timings last: test_kernel_paths compares the bytes before them across force paths.
     w.put(s.phase_.forces);
     w.put(s.phase_.integration);
     w.put(s.phase_.neighbors);
