@@ -100,9 +100,8 @@ void write_summary(std::ostream& out, const store::StoreStatus& status,
         if (p.uncensored > 0)
             std::snprintf(surv, sizeof surv, "%.4g", p.survival_sum / p.uncensored);
         if (p.emptied > 0) std::snprintf(empty, sizeof empty, "%.4g", p.empty_sum / p.emptied);
-        std::snprintf(buf, sizeof buf, "%-*s  %*s  %6d  %6d  %14s  %14s\n",
-                      static_cast<int>(width), l.c_str(), column, stored.c_str(), p.failed, p.jams,
-                      surv, empty);
+        std::snprintf(buf, sizeof buf, "%-*s  %*s  %6d  %6d  %14s  %14s\n", static_cast<int>(width),
+                      l.c_str(), column, stored.c_str(), p.failed, p.jams, surv, empty);
         out << buf;
     }
     out << "(tau: mean survival time, the censored maximum-likelihood mean = flow time / jams)\n";

@@ -394,8 +394,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
 
     state->dispatching = true;
     Master master(channel, st, signals, mo, err);
-    const MasterReport rep = spec.target ? run_rounds(master, c, st, cost, totals, err)
-                                         : master.run(todo, totals);
+    const MasterReport rep =
+        spec.target ? run_rounds(master, c, st, cost, totals, err) : master.run(todo, totals);
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 
@@ -557,8 +557,9 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
     if (spec.target)
         out << "target " << config::to_string(spec.target->quantity)
             << ": 'to run' is the current round; each point that needs more gets "
-            << spec.target->round << " more per round, up to max_realizations = "
-            << spec.target->max_realizations << " (later rounds depend on the results)\n";
+            << spec.target->round
+            << " more per round, up to max_realizations = " << spec.target->max_realizations
+            << " (later rounds depend on the results)\n";
     out << "basis: cost model (mobile particles x time steps: settling the packing, emptying it "
            "at the 2-D Beverloo rate of the outlet and wall angle, jams and shakes; "
            "docs/performance.md) x ";

@@ -124,7 +124,8 @@ CampaignPlan get_plan(ByteReader& r) {
     if (r.remaining() > 0) {
         const std::uint32_t format = r.u32();
         if (format != plan_format_limits)
-            r.fail("plan format " + std::to_string(format) + " is unknown (written by a newer "
+            r.fail("plan format " + std::to_string(format) +
+                   " is unknown (written by a newer "
                    "version?)");
         for (auto& pt : p.points) {
             pt.limit = r.i32();

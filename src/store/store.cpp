@@ -57,9 +57,7 @@ struct RebuildSink : ReplaySink {
     layout::Writer& w;
     std::int64_t since_flush = 0;
     explicit RebuildSink(layout::Writer& writer) : w(writer) {}
-    void run_start(const State& s, bool changed) override {
-        w.run_start(s, changed);
-    }
+    void run_start(const State& s, bool changed) override { w.run_start(s, changed); }
     void result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                 const engine::RealizationResult& r) override {
         w.result(s, point, row, rec, r);

@@ -177,8 +177,9 @@ TEST(Plan, CarriesTheTypedSettingsAndParametersAndTheJournalKeepsThem) {
 // Issue 29: a campaign with a target plans max_realizations per point, but its plan lists only
 // the first round's seeds and the limit; the run-start record is as small as a plain one's.
 TEST(Plan, TargetCampaignListsItsFirstRoundAndItsLimitNotMaxRealizations) {
-    const std::string target = "target = \"tau\"\ntarget_rel_ci = 0.01\n"
-                               "max_realizations = 1000000\nround_realizations = 2\n";
+    const std::string target =
+        "target = \"tau\"\ntarget_rel_ci = 0.01\n"
+        "max_realizations = 1000000\nround_realizations = 2\n";
     std::string text = sweep_text;
     text.insert(text.find("[sweep]"), target);
     const auto s = sweep("", text);

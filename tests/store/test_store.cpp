@@ -272,7 +272,7 @@ TEST(Store, AllotmentsGrowThePlanRoundByRoundNotToItsLimit) {
         const AllotmentRecord round2{{PointAllotment{all.label, 0, seeds(0, 4)}}};
         s.allot(round2);
         const auto after_round = fs::file_size(journal_path(p));
-        s.allot(round2);                                             // again: nothing new
+        s.allot(round2);  // again: nothing new
         s.allot(AllotmentRecord{{PointAllotment{all.label, 2, seeds(2, 3)}}});  // inside it
         EXPECT_EQ(fs::file_size(journal_path(p)), after_round);
         EXPECT_EQ(s.plan().points[0].realizations(), 4);
@@ -281,10 +281,11 @@ TEST(Store, AllotmentsGrowThePlanRoundByRoundNotToItsLimit) {
         EXPECT_EQ(st.points[0].planned, 4);
         EXPECT_EQ(st.points[0].limit, 1000000);
         EXPECT_EQ(st.pending, 2);
-        EXPECT_TRUE(contains(message_of([&] {
-                                 s.allot(AllotmentRecord{{PointAllotment{all.label, 5, seeds(5, 6)}}});
-                             }),
-                             "leaves a gap"));
+        EXPECT_TRUE(
+            contains(message_of([&] {
+                         s.allot(AllotmentRecord{{PointAllotment{all.label, 5, seeds(5, 6)}}});
+                     }),
+                     "leaves a gap"));
         s.append(result_record(all, 2, fabricated(2)));
         s.end_run(RunEndRecord{utc_now(), "interrupted by SIGTERM", 3, 1.0, 0.01});
     }
