@@ -65,7 +65,8 @@ file=$(stat -c %s big.h5)
 import sys, h5py
 f = h5py.File(sys.argv[1], "r")
 tasks, planned = len(f["tasks/seed"]), [int(x) for x in f["points/realizations"][:]]
-assert tasks == sum(planned) and all(8 <= n <= 40 for n in planned), (tasks, planned)
+# 6 per point after three rounds (8 once the fourth is allotted), far below the limit.
+assert tasks == sum(planned) and all(6 <= n <= 40 for n in planned), (tasks, planned)
 PYEOF
 
 # 4. The same realizations, seeds and physics as max_realizations = 4 where both ran.
