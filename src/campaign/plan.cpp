@@ -182,6 +182,11 @@ double written_number(const std::vector<core::Setting>& parameters, std::string_
 
 }  // namespace
 
+int first_allotment(const config::CampaignSpec& spec, const config::Point& point) {
+    if (!spec.target) return point.realizations;
+    return std::clamp(point.first_round, std::min(1, point.realizations), point.realizations);
+}
+
 store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
     store::CampaignPlan plan;
     plan.name = spec.name;
@@ -197,11 +202,31 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
         p.particles = pt.scene.particles.count;
         p.settings = pt.settings;
         p.parameters = pt.parameters;
-        for (int r = 0; r < pt.realizations; ++r)
+        // With a target, the plan lists the first round's seeds and the limit; each later round
+        // adds its own (store::AllotmentRecord), so the plan costs what is planned (issue 29).
+        p.limit = pt.realizations;
+        const int listed = first_allotment(spec, pt);
+        p.seeds.reserve(static_cast<std::size_t>(listed));
+        for (int r = 0; r < listed; ++r)
             p.seeds.push_back(config::derive_seed(spec.seed, pt.settings, r));
         plan.points.push_back(std::move(p));
     }
     return plan;
+}
+
+store::CampaignPlan plan_additions(const store::CampaignPlan& stored, store::CampaignPlan sweep) {
+    std::map<std::string_view, const store::PointPlan*> by_label;
+    for (const auto& s : stored.points)
+        by_label.emplace(s.label, &s);
+    std::vector<store::PointPlan> added;
+    for (auto& p : sweep.points) {
+        const auto it = by_label.find(p.label);
+        if (it == by_label.end() || p.realizations() > it->second->realizations() ||
+            p.max_realizations() > it->second->max_realizations())
+            added.push_back(std::move(p));
+    }
+    sweep.points = std::move(added);
+    return sweep;
 }
 
 void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSummary>& runs) {
@@ -249,12 +274,17 @@ std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
     // Differences per point, grouped so that one changed base value reads as one line.
     std::map<std::string, std::vector<std::string>> by_diff;  // diff text -> points
     int changed = 0;
-    int new_points = 0, more_realizations = 0;
+    int new_points = 0;
+    long long more_realizations = 0;
+    std::map<std::string_view, const store::PointPlan*> by_label;  // not find(): 10^5 points
+    for (const auto& s : stored.points)
+        by_label.emplace(s.label, &s);
     for (const auto& p : sweep.points) {
-        const store::PointPlan* s = stored.find(p.label);
+        const auto found = by_label.find(p.label);
+        const store::PointPlan* s = found == by_label.end() ? nullptr : found->second;
         if (!s) {
             ++new_points;
-            more_realizations += p.realizations();
+            more_realizations += p.max_realizations();
             continue;
         }
         if (p.scene != s->scene) {
@@ -269,8 +299,9 @@ std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
                     "point '" + p.label + "' realization " + std::to_string(r) + " has seed " +
                     std::to_string(p.seeds[r]) + " here but " + std::to_string(s->seeds[r]) +
                     " in the store (the seed derivation changed between versions?)" + advice);
-        if (p.seeds.size() > s->seeds.size())
-            more_realizations += static_cast<int>(p.seeds.size() - s->seeds.size());
+        // Counted to the limits: a target campaign lists only the seeds of its rounds so far.
+        if (p.max_realizations() > s->max_realizations())
+            more_realizations += p.max_realizations() - s->max_realizations();
     }
     if (changed > 0) {
         std::string msg = "the sweep file's physics differs from the store's for " +

@@ -29,10 +29,15 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
         throw core::ConfigError("--point: no point '" + label + "' in " + store_path.string() +
                                 "; its points are:" + labels);
     }
-    if (realization < 0 || realization >= p->realizations())
+    if (realization < 0 || realization >= p->max_realizations())
         throw core::ConfigError("--realization " + std::to_string(realization) + ": point '" +
                                 label + "' has realizations 0.." +
-                                std::to_string(p->realizations() - 1));
+                                std::to_string(p->max_realizations() - 1));
+    // A target campaign's plan lists the seeds of its rounds so far; later ones are derived
+    // (the plan's typed settings are recorded with every plan that has a limit).
+    const std::uint64_t seed = realization < p->realizations()
+                                   ? p->seeds[static_cast<std::size_t>(realization)]
+                                   : config::derive_seed(st.plan.seed, p->settings, realization);
     // The scene: from the sweep texts the store recorded, newest run first; the point's stored
     // scene text (every parameter) must come out exactly, so the physics is the stored one.
     for (auto r = st.runs.rbegin(); r != st.runs.rend(); ++r) {
@@ -52,8 +57,7 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
                         return std::get<double>(s.value);
                 return fallback;
             };
-            return {q.scene, p->seeds[static_cast<std::size_t>(realization)],
-                    written("D_cm", p->D_cm), written("theta_deg", p->theta_deg),
+            return {q.scene, seed, written("D_cm", p->D_cm), written("theta_deg", p->theta_deg),
                     r->info.sweep_path};
         }
     }

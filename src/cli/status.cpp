@@ -162,6 +162,7 @@ std::string status_json(const store::StoreStatus& s) {
     for (const auto& p : s.points)
         points.push_back(Json{{"label", p.label},
                               {"total", p.planned},
+                              {"limit", p.limit},
                               {"done", p.done},
                               {"failed", p.failed},
                               {"errors", p.errors},
@@ -261,17 +262,28 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
             << " (they continue from it in the next run)\n";
     if (!s.points.empty()) {
         std::size_t width = 5;
-        for (const auto& p : s.points)
+        bool limits = false;  // a target campaign: its rounds so far, then "up to" its limit
+        for (const auto& p : s.points) {
             width = std::max(width, p.label.size());
+            limits = limits || p.limit > p.planned;
+        }
         char buf[512];
-        std::snprintf(buf, sizeof buf, "\n%-*s  %7s  %7s  %7s  %7s\n", static_cast<int>(width),
-                      "point", "total", "done", "failed", "pending");
+        std::snprintf(buf, sizeof buf, "\n%-*s  %7s  %7s  %7s  %7s%s\n", static_cast<int>(width),
+                      "point", "total", "done", "failed", "pending", limits ? "    up to" : "");
         out << buf;
         for (const auto& p : s.points) {
-            std::snprintf(buf, sizeof buf, "%-*s  %7d  %7d  %7d  %7d\n", static_cast<int>(width),
+            std::snprintf(buf, sizeof buf, "%-*s  %7d  %7d  %7d  %7d", static_cast<int>(width),
                           p.label.c_str(), p.planned, p.done, p.failed, p.pending);
             out << buf;
+            if (limits) {
+                std::snprintf(buf, sizeof buf, "  %7d", p.limit);
+                out << buf;
+            }
+            out << '\n';
         }
+        if (limits)
+            out << "(total: the realizations the rounds allotted so far; up to: "
+                   "max_realizations)\n";
     }
     if (!s.failures.empty()) {
         out << "\nfailures\n";

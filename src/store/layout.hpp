@@ -30,6 +30,8 @@ class Writer {
     ~Writer();  // closes without marking the file consistent
 
     void run_start(const State& s, bool plan_changed);
+    // A target campaign's next round allotted realizations (the /points and /tasks tables).
+    void allotment(const State& s, bool plan_changed);
     void result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                 const engine::RealizationResult& r);
     void error(const State& s, int point, const ErrorRecord& rec);

@@ -65,6 +65,10 @@ std::vector<core::Setting> get_settings(ByteReader& r) {
     return out;
 }
 
+// The plan's sections after the seeds: settings (no marker: records ended after the seeds
+// before them), then a format number and what it adds.
+constexpr std::uint32_t plan_format_limits = 2;
+
 void put(ByteWriter& w, const CampaignPlan& p) {
     w.str(p.name);
     w.u64(p.seed);
@@ -85,6 +89,11 @@ void put(ByteWriter& w, const CampaignPlan& p) {
         put(w, pt.settings);
         put(w, pt.parameters);
     }
+    // Plan format 2 (issue 29), after the settings so that records written before end there:
+    // per point its limit (the seeds then list only the allotted realizations).
+    w.u32(plan_format_limits);
+    for (const auto& pt : p.points)
+        w.i32(pt.max_realizations());
 }
 
 CampaignPlan get_plan(ByteReader& r) {
@@ -112,6 +121,22 @@ CampaignPlan get_plan(ByteReader& r) {
             pt.settings = get_settings(r);
             pt.parameters = get_settings(r);
         }
+    if (r.remaining() > 0) {
+        const std::uint32_t format = r.u32();
+        if (format != plan_format_limits)
+            r.fail("plan format " + std::to_string(format) +
+                   " is unknown (written by a newer "
+                   "version?)");
+        for (auto& pt : p.points) {
+            pt.limit = r.i32();
+            if (pt.limit < pt.realizations())
+                r.fail("point '" + pt.label + "' has a limit of " + std::to_string(pt.limit) +
+                       " realizations below its " + std::to_string(pt.realizations()) + " seeds");
+        }
+    } else {
+        for (auto& pt : p.points)
+            pt.limit = pt.realizations();  // plans before issue 29 list every seed
+    }
     return p;
 }
 
@@ -261,6 +286,40 @@ SyncRecord decode_sync(std::span<const std::uint8_t> b) {
         f.bytes = in.u64();
         f.crc32c = in.u32();
         r.file = f;
+    }
+    in.expect_end();
+    return r;
+}
+
+Bytes encode(const AllotmentRecord& r) {
+    ByteWriter w;
+    w.u32(static_cast<std::uint32_t>(r.points.size()));
+    for (const auto& p : r.points) {
+        w.str(p.label);
+        w.i32(p.first);
+        w.u32(static_cast<std::uint32_t>(p.seeds.size()));
+        for (auto s : p.seeds)
+            w.u64(s);
+    }
+    return w.take();
+}
+
+AllotmentRecord decode_allotment(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal allotment record");
+    AllotmentRecord r;
+    const std::uint32_t n = in.u32();
+    if (n > in.remaining()) in.fail("a point count of " + std::to_string(n) + " is impossible");
+    r.points.resize(n);
+    for (auto& p : r.points) {
+        p.label = in.str();
+        p.first = in.i32();
+        if (p.first < 0) in.fail("a negative first realization " + std::to_string(p.first));
+        const std::uint32_t ns = in.u32();
+        if (static_cast<std::uint64_t>(ns) * 8 > in.remaining())
+            in.fail("a realization count of " + std::to_string(ns) + " exceeds the bytes left");
+        p.seeds.resize(ns);
+        for (auto& s : p.seeds)
+            s = in.u64();
     }
     in.expect_end();
     return r;

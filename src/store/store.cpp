@@ -57,9 +57,7 @@ struct RebuildSink : ReplaySink {
     layout::Writer& w;
     std::int64_t since_flush = 0;
     explicit RebuildSink(layout::Writer& writer) : w(writer) {}
-    void run_start(const State& s, const RunStartRecord&, bool changed) override {
-        w.run_start(s, changed);
-    }
+    void run_start(const State& s, bool changed) override { w.run_start(s, changed); }
     void result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                 const engine::RealizationResult& r) override {
         w.result(s, point, row, rec, r);
@@ -72,6 +70,7 @@ struct RebuildSink : ReplaySink {
         w.error(s, point, rec);
     }
     void run_end(const State& s, const RunEndRecord&) override { w.run_end(s); }
+    void allotment(const State& s, bool changed) override { w.allotment(s, changed); }
 };
 
 // The HDF5 file `target` written from the journal's records before `limit` (truncates it), then
@@ -286,11 +285,11 @@ StoreStatus Store::status() const {
     return s;
 }
 
-void Store::begin_run(const RunStartRecord& run) {
+void Store::begin_run(RunStartRecord run) {
     Impl& m = *impl_;
     if (m.run_open) throw core::StoreError("internal: begin_run() twice");
     m.journal->append(RecordType::run_start, encode(run));
-    const bool changed = m.state.apply(run);
+    const bool changed = m.state.apply(std::move(run));
     m.state.last_type = RecordType::run_start;
     if (m.h5_in_step) {
         try {
@@ -330,6 +329,36 @@ void Store::append(const ResultRecord& r) {
     m.state.last_type = RecordType::result;
     m.update_view([&] {
         if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
+        m.maybe_flush();
+    });
+}
+
+void Store::allot(const AllotmentRecord& r) {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: allot() outside a run");
+    AllotmentRecord grow;
+    for (const auto& p : r.points) {
+        const int i = m.state.find_point(p.label);
+        if (i < 0)
+            throw core::StoreError("internal: allotment for unplanned point '" + p.label + "'");
+        const int have = m.state.plan.points[static_cast<std::size_t>(i)].realizations();
+        const int end = p.first + static_cast<int>(p.seeds.size());
+        if (end <= have) continue;
+        if (p.first > have)
+            throw core::StoreError("internal: allotment of '" + p.label + "' from realization " +
+                                   std::to_string(p.first) + " leaves a gap after " +
+                                   std::to_string(have));
+        // Only what is new: the record costs what the round adds.
+        grow.points.push_back(PointAllotment{
+            p.label, have,
+            std::vector<std::uint64_t>(p.seeds.begin() + (have - p.first), p.seeds.end())});
+    }
+    if (grow.points.empty()) return;
+    m.journal->append(RecordType::allotment, encode(grow));
+    const bool changed = m.state.apply(grow);
+    m.state.last_type = RecordType::allotment;
+    m.update_view([&] {
+        m.writer->allotment(m.state, changed);
         m.maybe_flush();
     });
 }

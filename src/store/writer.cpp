@@ -343,6 +343,10 @@ void Writer::run_start(const State&, bool plan_changed) {
     impl_->runs_dirty = true;
 }
 
+void Writer::allotment(const State&, bool plan_changed) {
+    if (plan_changed) impl_->plan_dirty = true;
+}
+
 void Writer::result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                     const engine::RealizationResult& r) {
     Impl& m = *impl_;

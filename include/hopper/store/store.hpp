@@ -63,7 +63,8 @@ struct TaskEntry {
 
 struct PointStatus {
     std::string label;
-    int planned = 0;
+    int planned = 0;  // allotted so far (a target campaign: to the end of its current round)
+    int limit = 0;    // the most it may have (max_realizations with a target, else planned)
     int done = 0;
     int failed = 0;  // failed results plus tasks in error
     int errors = 0;  // of which in error (retried by the next run)
@@ -181,7 +182,10 @@ class Store {
     // Records a run and its plan (the caller has checked that the plan's physics agrees with
     // plan()); extends the store's plan with new points and realizations. Brings the HDF5 file
     // in step (rebuilding it from the journal when needed) and opens it for writing.
-    void begin_run(const RunStartRecord& run);
+    void begin_run(RunStartRecord run);
+    // Records the realizations a target campaign's next round allots (only the points whose
+    // allotment grows; nothing when none does), before they are handed out.
+    void allot(const AllotmentRecord& r);
     // Durable (journal fsync) when it returns; the HDF5 file follows within flush_interval.
     void append(const ResultRecord& r);
     void append(const ErrorRecord& r);
