@@ -518,8 +518,15 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
     const double per_cost = measured ? measured_s / measured_cost : 0.0;
     out << "dry run: " << c.sweep.path.string() << " on " << store_path.string()
         << (existing ? "" : " (new)") << "; nothing is run or written\n";
-    char line[512];
-    std::snprintf(line, sizeof line, "%-40s %9s %7s %7s %12s %11s\n", "point", "particles",
+    // The point column as wide as the longest label (at least 40): a label cut short can hide
+    // what tells two points apart ("hopper.particles=3" for 300 and for 3000).
+    int width = 40;
+    for (const auto& pt : spec.points)
+        width = std::max(width, static_cast<int>(pt.label.size()));
+    std::vector<char> buffer(static_cast<std::size_t>(width) + 128);
+    char* const line = buffer.data();
+    const std::size_t line_size = buffer.size();
+    std::snprintf(line, line_size, "%-*s %9s %7s %7s %12s %11s\n", width, "point", "particles",
                   "stored", "to run", "s/realiz.", "core-hours");
     out << line;
     double total_h = 0.0;
@@ -542,13 +549,12 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
         total_h += hours;
         total_runs += to_run;
         if (totals && to_run > 0) totals->longest_seconds = std::max(totals->longest_seconds, each);
-        std::snprintf(line, sizeof line, "%-40s %9d %7d %7d %12.1f %11.3f\n",
-                      pt.label.substr(0, 40).c_str(), pt.scene.particles.count, stored, to_run,
-                      each, hours);
+        std::snprintf(line, line_size, "%-*s %9d %7d %7d %12.1f %11.3f\n", width,
+                      pt.label.c_str(), pt.scene.particles.count, stored, to_run, each, hours);
         out << line;
     }
-    std::snprintf(line, sizeof line, "%-40s %9s %7s %7d %12s %11.3f\n", "total", "", "", total_runs,
-                  "", total_h);
+    std::snprintf(line, line_size, "%-*s %9s %7s %7d %12s %11.3f\n", width, "total", "", "",
+                  total_runs, "", total_h);
     out << line;
     if (totals) {
         totals->worker_seconds = total_h * 3600.0;
