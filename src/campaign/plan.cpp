@@ -8,7 +8,9 @@
 #include <string_view>
 #include <variant>
 
+#include "hopper/campaign/stored_scenes.hpp"
 #include "hopper/config/sanity.hpp"
+#include "hopper/config/scene_schema.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/engine/scene.hpp"
 #include "hopper/store/codec.hpp"
@@ -16,33 +18,6 @@
 namespace hopper::campaign {
 
 namespace {
-
-std::string number(double v) {
-    char buf[64];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
-}
-
-class Lines {
-  public:
-    void add(const char* name, double v) { text_ += std::string(name) + "=" + number(v) + "\n"; }
-    void add(const char* name, int v) {
-        text_ += std::string(name) + "=" + std::to_string(v) + "\n";
-    }
-    void add(const char* name, const std::string& v) {
-        text_ += std::string(name) + "=" + v + "\n";
-    }
-    void add(const char* name, const std::optional<double>& v) {
-        if (v)
-            add(name, *v);
-        else
-            add(name, std::string("unset"));
-    }
-    std::string take() { return std::move(text_); }
-
-  private:
-    std::string text_;
-};
 
 // "name=value" texts of typed settings, by name.
 std::map<std::string, std::string> by_name(const std::vector<core::Setting>& settings) {
@@ -73,100 +48,9 @@ std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& s
 }  // namespace
 
 std::string scene_text(const engine::SceneParams& p) {
-    // Keep in step with engine::SceneParams (every field that changes the physics). The text is
-    // a fingerprint only: it is hashed and compared, never parsed back into values (the typed
-    // `parameters` of the plan are for that).
-    Lines l;
-    l.add("hopper.width_m", p.hopper.width);
-    l.add("hopper.outlet_m", p.hopper.outlet);
-    l.add("hopper.theta_rad", p.hopper.theta);
-    l.add("hopper.wall_diameter_m", p.hopper.wall_diameter);
-    l.add("hopper.wall_spacing", p.hopper.wall_spacing);
-    l.add("particles.count", p.particles.count);
-    l.add("particles.small_fraction", p.particles.small_fraction);
-    l.add("particles.d_small_m", p.particles.d_small);
-    l.add("particles.d_large_m", p.particles.d_large);
-    l.add("particles.thickness_m", p.particles.thickness);
-    l.add("particles.density_kg_m3", p.particles.density);
-    l.add("material.e_n", p.material.system.e_n);
-    l.add("material.mu", p.material.system.mu);
-    l.add("walls.e_n", p.material.wall.e_n);
-    l.add("walls.mu", p.material.wall.mu);
-    l.add("material.kt_over_kn", p.material.kt_over_kn);
-    l.add("material.youngs_modulus_pa", p.material.youngs_modulus);
-    l.add("material.poisson_ratio", p.material.poisson_ratio);
-    l.add("material.collision_time_s", p.material.collision_time);
-    l.add("integrator.scheme", engine::to_string(p.integrator.scheme));
-    l.add("integrator.steps_per_collision", p.integrator.steps_per_collision);
-    l.add("integrator.skin", p.integrator.skin);
-    const auto& q = p.protocol;
-    l.add("protocol.fill_gap", q.fill_gap);
-    l.add("protocol.fill_speed_m_s", q.fill_speed);
-    l.add("protocol.settle_ke", q.settle_ke);
-    l.add("protocol.settle_hold_s", q.settle_hold);
-    l.add("protocol.settle_max_time_s", q.settle_max_time);
-    l.add("protocol.jam_region_height", q.jam_region_height);
-    l.add("protocol.t_check_s", q.t_check);
-    l.add("protocol.detector_interval_s", q.detector_interval);
-    l.add("protocol.shake_amplitude", q.shake_amplitude);
-    l.add("protocol.shake_period_s", q.shake_period);
-    l.add("protocol.shake_direction_rad", q.shake_direction);
-    l.add("protocol.max_shakes", q.max_shakes);
-    l.add("protocol.max_time_s", q.max_time);
-    l.add("protocol.exit_depth", q.exit_depth);
-    l.add("protocol.empty_threshold", q.empty_threshold);
-    l.add("protocol.sample_interval_s", q.sample_interval);
-    l.add("protocol.max_overlap", q.max_overlap);
-    l.add("gravity_m_s2", p.gravity);
-    // Modelling choices added later (issue 11): listed only when they differ from the default,
-    // so that a point's text (and its physics check) is unchanged for stores written before.
-    const engine::SceneParams d;
-    const auto& h = p.hopper;
-    const auto& m = p.material;
-    if (h.outlet_measure != d.hopper.outlet_measure)
-        l.add("hopper.outlet_measure", engine::to_string(h.outlet_measure));
-    if (h.edge_diameter) l.add("hopper.edge_diameter_m", *h.edge_diameter);
-    if (h.edge_offset != d.hopper.edge_offset) l.add("hopper.edge_offset", h.edge_offset);
-    if (m.gamma_t_over_gamma_n != d.material.gamma_t_over_gamma_n)
-        l.add("material.gamma_t_over_gamma_n", m.gamma_t_over_gamma_n);
-    if (m.slip_rule != d.material.slip_rule)
-        l.add("material.slip_rule", engine::to_string(m.slip_rule));
-    if (m.lever_arm != d.material.lever_arm)
-        l.add("material.lever_arm", engine::to_string(m.lever_arm));
-    // Issue 28: the normal law, listed only when it is not the linear one.
-    if (m.normal_law != d.material.normal_law)
-        l.add("material.normal_law", engine::to_string(m.normal_law));
-    if (m.mu_r != d.material.mu_r) l.add("material.mu_r", m.mu_r);
-    if (m.normal_damping != d.material.normal_damping)
-        l.add("material.normal_damping", engine::to_string(m.normal_damping));
-    if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
-    // Issue 12: listed only when on (stores written before it have it off).
-    if (p.integrator.contact_corrections)
-        l.add("integrator.contact_corrections", std::string("true"));
-    // Steady state (issue 13): listed only when not the published protocol.
-    if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
-    if (q.jams_per_realization != d.protocol.jams_per_realization)
-        l.add("protocol.jams_per_realization", q.jams_per_realization);
-    // The unjamming protocol (issue 26): listed only when it is not the shake.
-    if (q.unjam != d.protocol.unjam) l.add("protocol.unjam", engine::to_string(q.unjam));
-    // Growing shakes (issue 23): listed only when the shakes grow.
-    if (q.shake_growth != d.protocol.shake_growth) {
-        l.add("protocol.shake_growth", q.shake_growth);
-        l.add("protocol.shake_amplitude_max", q.shake_amplitude_max);
-    }
-    // Fields: listed only when on, so stores written before fields existed stay compatible.
-    const auto& f = p.fields;
-    if (f.enabled) {
-        l.add("fields.window_s", f.window);
-        l.add("fields.cell_dlarge", f.cell);
-        l.add("fields.sample_interval_s", f.sample_interval);
-        l.add("fields.start_s", f.start);
-        l.add("fields.end_s", f.end);
-        l.add("fields.kernel", engine::to_string(f.kernel));
-        if (f.kernel == engine::FieldKernel::gaussian)
-            l.add("fields.kernel_width_dlarge", f.kernel_width);
-    }
-    return l.take();
+    // Generated from the scene schema (config/scene_schema.hpp), byte for byte the text of the
+    // hand-written list it replaced (tests/campaign/test_fingerprint_rows.cpp).
+    return config::scene_fingerprint(p);
 }
 
 namespace {
@@ -234,24 +118,12 @@ void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSum
         return p.settings.empty() || p.parameters.empty();
     };
     if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
-    for (auto run = runs.rbegin(); run != runs.rend(); ++run) {
-        std::vector<config::Point> points;
-        try {
-            points = config::parse_sweep(run->info.sweep_text, "<recorded sweep>").campaign.points;
-        } catch (const core::ConfigError&) {
-            continue;  // written for another version of the keys: no help
+    const auto recorded = recorded_points(plan, runs, missing);  // the legacy path
+    for (std::size_t i = 0; i < plan.points.size(); ++i)
+        if (recorded[i]) {
+            plan.points[i].settings = recorded[i]->point.settings;
+            plan.points[i].parameters = recorded[i]->point.parameters;
         }
-        for (auto& p : plan.points) {
-            if (!missing(p)) continue;
-            for (const auto& q : points)
-                if (q.label == p.label && scene_text(q.scene) == p.scene) {
-                    p.settings = q.settings;
-                    p.parameters = q.parameters;
-                    break;
-                }
-        }
-        if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
-    }
 }
 
 store::CampaignPlan read_plan(const std::filesystem::path& store) {

@@ -18,6 +18,7 @@
 #include "hopper/campaign/mixing.hpp"
 #include "hopper/campaign/mpi.hpp"
 #include "hopper/campaign/plan.hpp"
+#include "hopper/campaign/point_columns.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/running.hpp"
 #include "hopper/campaign/signals.hpp"
@@ -230,7 +231,9 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         throw core::ConfigError("the deadline has already passed (" +
                                 format_duration(store::unix_now() - *deadline) +
                                 " ago): no realization is started; give a later --deadline");
-    store::Store st(store_path, opt.store_options);
+    store::StoreOptions store_options = opt.store_options;
+    if (!store_options.point_parameters) store_options.point_parameters = point_parameter_columns;
+    store::Store st(store_path, std::move(store_options));
     for (const auto& n : st.notes())
         err << "campaign: note: " << n << '\n';
 

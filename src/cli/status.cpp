@@ -13,6 +13,7 @@
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/running.hpp"
+#include "hopper/campaign/stored_scenes.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
@@ -74,17 +75,13 @@ ProgressEstimate estimate_progress(const store::StoreStatus& s, double now_unix)
     const double start = iso_to_unix(last.info.start_time);
     const double end = last.end ? iso_to_unix(last.end->end_time) : now_unix;
     if (start > 0 && end > start) e.per_hour = last.stored / (end - start) * 3600.0;
-    // Cost of one realization of each point, from the newest sweep text that has the point.
+    // Cost of one realization of each point, from its scene (typed parameters, or for a store
+    // older than them the recorded sweep texts: campaign::point_scenes).
     std::map<std::string, double> cost;
-    for (auto r = s.runs.rbegin(); r != s.runs.rend(); ++r) {
-        try {
-            const auto sweep = config::parse_sweep(r->info.sweep_text, r->info.sweep_path);
-            for (const auto& p : sweep.campaign.points)
-                cost.try_emplace(p.label, campaign::expected_cost(p.scene));
-        } catch (const std::exception&) {
-            // a sweep text this version no longer reads: its points keep the mean cost
-        }
-    }
+    const auto scenes = campaign::point_scenes(s.plan, s.runs);
+    for (std::size_t i = 0; i < scenes.size(); ++i)
+        if (scenes[i])
+            cost.try_emplace(s.plan.points[i].label, campaign::expected_cost(*scenes[i]));
     double known = 0.0;
     for (const auto& [label, c] : cost)
         known += c;

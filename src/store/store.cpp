@@ -77,8 +77,8 @@ struct RebuildSink : ReplaySink {
 // closed as in step with `token` and `journal_bytes` (the rebuild and the snapshot).
 void write_from_journal(const fs::path& jpath, std::uint64_t limit, const fs::path& target,
                         const std::string& journal_name, std::uint64_t token,
-                        std::uint64_t journal_bytes) {
-    layout::Writer w = layout::Writer::create(target, journal_name);
+                        std::uint64_t journal_bytes, const PointParameters& parameters) {
+    layout::Writer w = layout::Writer::create(target, journal_name, parameters);
     State fresh;
     RebuildSink sink(w);
     scan_journal(jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
@@ -125,7 +125,8 @@ struct Store::Impl {
         std::error_code ec;
         fs::remove(tmp, ec);
         // Consistent, but not a sync point (token 0).
-        write_from_journal(jpath, journal->size(), tmp, jpath.filename().string(), 0, 0);
+        write_from_journal(jpath, journal->size(), tmp, jpath.filename().string(), 0, 0,
+                           opt.point_parameters);
         fsync_path(tmp);
         crash_point("rebuild");
         fs::rename(tmp, path);
@@ -293,7 +294,7 @@ void Store::begin_run(RunStartRecord run) {
     m.state.last_type = RecordType::run_start;
     if (m.h5_in_step) {
         try {
-            m.writer.emplace(layout::Writer::open(m.path));
+            m.writer.emplace(layout::Writer::open(m.path, m.opt.point_parameters));
         } catch (const core::StoreError& e) {
             m.notes.push_back(std::string("cannot open the HDF5 file for writing (") + e.what() +
                               "); rebuilding it");
@@ -301,8 +302,11 @@ void Store::begin_run(RunStartRecord run) {
         }
     }
     if (!m.writer) {
-        m.rebuild();
-        m.writer.emplace(layout::Writer::open(m.path));
+        // The run-start record is journaled: a failed rebuild (a full disk) loses nothing.
+        m.update_view([&] {
+            m.rebuild();
+            m.writer.emplace(layout::Writer::open(m.path, m.opt.point_parameters));
+        });
     } else {
         m.writer->run_start(m.state, changed);
     }
@@ -466,7 +470,8 @@ std::vector<StoredRealization> read_journal_realizations(const fs::path& store) 
     return out;
 }
 
-Snapshot write_snapshot(const fs::path& store, const fs::path& out) {
+Snapshot write_snapshot(const fs::path& store, const fs::path& out,
+                        const PointParameters& point_parameters) {
     const h5::QuietErrors quiet;
     const fs::path src = journal_path(store);
     const fs::path dst = journal_path(out);
@@ -504,7 +509,7 @@ Snapshot write_snapshot(const fs::path& store, const fs::path& out) {
         scan, JournalOptions{.require_lock = false, .before_link = {}});
     const std::uint64_t token = random_token();
     const std::uint64_t at = journal.size();
-    write_from_journal(dst, at, out, dst.filename().string(), token, at);
+    write_from_journal(dst, at, out, dst.filename().string(), token, at, point_parameters);
     fsync_path(out);
     journal.append(
         RecordType::sync,

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "hopper/engine/result.hpp"
+#include "hopper/store/analysis.hpp"
 #include "hopper/store/records.hpp"
 
 namespace hopper::store {
@@ -141,7 +142,15 @@ struct Snapshot {
     std::uint64_t journal_bytes = 0;  // the journal's length it was taken at
     bool writer_active = false;       // a `campaign run` held the store when it was taken
 };
-Snapshot write_snapshot(const std::filesystem::path& store, const std::filesystem::path& out);
+// The typed columns of /points/parameters (docs/store.md): one dataset per scene parameter, one
+// value per point of the plan, with its units. The store does not know the scene's parameters:
+// the layer that does gives them (campaign::point_parameter_columns, from the scene schema);
+// the runs are there for points recorded before typed parameters. Empty: no such group.
+using PointParameters = std::function<std::vector<DerivedDataset>(
+    const CampaignPlan& plan, const std::vector<RunSummary>& runs)>;
+
+Snapshot write_snapshot(const std::filesystem::path& store, const std::filesystem::path& out,
+                        const PointParameters& point_parameters = {});
 
 struct StoreOptions {
     // Seconds between HDF5 flushes while running (0: after every result). The journal is
@@ -158,6 +167,8 @@ struct StoreOptions {
     // Test hook: called when a new journal is complete under its private name, before it is
     // linked into place (tests pause here to make two runs race for a new store).
     std::function<void()> before_journal_link;
+    // The typed /points/parameters columns (see PointParameters); empty: not written.
+    PointParameters point_parameters;
 };
 
 // The master's handle. Opening takes the journal's lock (one writer at a time), scans the
