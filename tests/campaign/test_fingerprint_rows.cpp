@@ -408,8 +408,9 @@ TEST(FingerprintRows, SchemaRowsDescribeThemselves) {
         }
         EXPECT_EQ(++names[std::string(r.fingerprint.name)], 1) << r.fingerprint.name;
         EXPECT_EQ(++positions[r.fingerprint.position], 1) << r.name;
-        if (!r.fingerprint.only_with.empty())
+        if (!r.fingerprint.only_with.empty()) {
             EXPECT_NE(config::find_row(r.fingerprint.only_with), nullptr) << r.name;
+        }
     }
     EXPECT_EQ(config::find_row("gravity_m_s2")->in_sweep_file, false);
     EXPECT_EQ(config::detail::find_name("gravity_m_s2"), nullptr);  // not a sweep key

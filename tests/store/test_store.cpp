@@ -375,7 +375,7 @@ TEST(Store, ASnapshotNeedsTheJournal) {
 TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     const fs::path p = scratch() / "s.h5";
     {
-        Store s(p, StoreOptions{0.0, "", 0, true, {}});
+        Store s(p, StoreOptions{0.0, "", 0, true, {}, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 0, fabricated(0)));
         s.append(result_record(B, 1, fabricated(1)));
@@ -562,7 +562,7 @@ TEST_P(CrashPoint, KilledWriterLosesNothingCountedAsDone) {
     }
     if (std::string(where) == "rebuild") fs::remove(p);  // force a rebuild in the child
     ASSERT_TRUE(dies_of_sigkill([&, where = where, n = n] {
-        Store s(p, StoreOptions{0.0, where, n, true, {}});
+        Store s(p, StoreOptions{0.0, where, n, true, {}, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 1, fabricated(1)));
         s.append(result_record(A, 2, fabricated(2)));
