@@ -1,6 +1,7 @@
 #include "hopper/campaign/stored_scenes.hpp"
 
 #include <algorithm>
+#include <exception>
 
 #include "hopper/campaign/plan.hpp"
 #include "hopper/config/scene_schema.hpp"
@@ -35,6 +36,16 @@ std::vector<std::optional<RecordedPoint>> recorded_points(
         }
     }
     return out;
+}
+
+std::optional<config::CampaignSpec> recorded_campaign(const std::vector<store::RunSummary>& runs) {
+    if (runs.empty()) return std::nullopt;
+    try {
+        return config::parse_sweep(runs.back().info.sweep_text, runs.back().info.sweep_path)
+            .campaign;
+    } catch (const std::exception&) {
+        return std::nullopt;  // a sweep text this version no longer reads
+    }
 }
 
 std::optional<engine::SceneParams> typed_scene(const store::PointPlan& p) {

@@ -292,21 +292,15 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
     }
 }
 
-// A campaign with a target (adaptive.hpp) plans max_realizations per point but runs only what
-// its rounds decide: pending is what the current round still lacks (0 once the target is met),
+// A campaign with a target (adaptive.hpp) runs up to max_realizations per point, as its rounds
+// decide: pending is what the current round still lacks (0 once the target is met),
 // replayed from the stored results as `campaign run` does. Without this, the batch script would
 // resubmit a finished target campaign up to its cap. Returns the description of the rounds
 // (empty without a target).
 std::string apply_target(store::StoreStatus& s) {
-    if (s.runs.empty()) return {};
-    config::SweepFile sweep;
-    try {
-        sweep = config::parse_sweep(s.runs.back().info.sweep_text, s.runs.back().info.sweep_path);
-    } catch (const std::exception&) {
-        return {};  // a sweep text this version no longer reads: the plan's counts stand
-    }
-    const auto& spec = sweep.campaign;
-    if (!spec.target) return {};
+    const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
+    if (!recorded || !recorded->target) return {};
+    const config::CampaignSpec& spec = *recorded;
     std::map<std::string, campaign::PointResults> stored;
     for (auto& r : store::read_journal_realizations(s.store))
         stored[r.label][r.record.realization] = std::move(r.result);

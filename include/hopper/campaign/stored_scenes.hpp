@@ -3,7 +3,9 @@
 // (config::scene_from_parameters), and checked against its stored fingerprint. The one legacy
 // path, for stores older than typed parameters: the points of the sweep texts the runs recorded,
 // newest run first, matched by label and fingerprint. restore_settings (plan.hpp), `campaign
-// status`'s estimate and `campaign simulate --point` all go through here.
+// status`'s estimate and `campaign simulate --point` all go through here. It is the one place that
+// parses recorded sweep texts; the campaign's target, recorded nowhere else, is read here too
+// (recorded_campaign).
 
 #include <functional>
 #include <optional>
@@ -29,6 +31,12 @@ struct RecordedPoint {
 std::vector<std::optional<RecordedPoint>> recorded_points(
     const store::CampaignPlan& plan, const std::vector<store::RunSummary>& runs,
     const std::function<bool(const store::PointPlan&)>& wanted = {});
+
+// The campaign of the newest run's recorded sweep text (its target, rounds and points as that run
+// planned them): what `campaign status` replays a target campaign's rounds with, as `campaign
+// run` does. nullopt without runs or when this version cannot read that text (the plan's counts
+// then stand).
+std::optional<config::CampaignSpec> recorded_campaign(const std::vector<store::RunSummary>& runs);
 
 // The point's scene from its typed parameters, when they give its stored text exactly; nullopt
 // when it has none (a store older than them) or they do not (another version's keys).
