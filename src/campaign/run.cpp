@@ -552,8 +552,8 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
         total_h += hours;
         total_runs += to_run;
         if (totals && to_run > 0) totals->longest_seconds = std::max(totals->longest_seconds, each);
-        std::snprintf(line, line_size, "%-*s %9d %7d %7d %12.1f %11.3f\n", width,
-                      pt.label.c_str(), pt.scene.particles.count, stored, to_run, each, hours);
+        std::snprintf(line, line_size, "%-*s %9d %7d %7d %12.1f %11.3f\n", width, pt.label.c_str(),
+                      pt.scene.particles.count, stored, to_run, each, hours);
         out << line;
     }
     std::snprintf(line, line_size, "%-*s %9s %7s %7d %12s %11.3f\n", width, "total", "", "",

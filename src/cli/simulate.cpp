@@ -67,8 +67,8 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
                 return std::get<double>(s.value);
         return fallback;
     };
-    return {*scene, seed, as_written("D_cm", p->D_cm),
-            as_written("theta_deg", p->theta_deg), sweep_path};
+    return {*scene, seed, as_written("D_cm", p->D_cm), as_written("theta_deg", p->theta_deg),
+            sweep_path};
 }
 
 int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& err) {

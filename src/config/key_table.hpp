@@ -1,8 +1,9 @@
 #pragma once
 // The config layer's private pieces (not installed): the key table -- the rows of the scene
 // schema (hopper/config/scene_schema.hpp) that a sweep file may set, under their one canonical
-// name -- and the text helpers the parser's messages share. The table is the single list of setting names: labels, seeds, `parameter_names()` and
-// the typed `parameters` of a point (core::Setting) all come from it.
+// name -- and the text helpers the parser's messages share. The table is the single list of setting
+// names: labels, seeds, `parameter_names()` and the typed `parameters` of a point (core::Setting)
+// all come from it.
 
 #include <array>
 #include <optional>

@@ -94,11 +94,9 @@ std::vector<std::string> parameter_names() {
 
 std::optional<core::Setting> default_parameter(std::string_view name) {
     static const engine::SceneParams defaults{};
-    for (const auto& d : key_table())
-        if (d.name == name) {
-            if (auto v = d.read(defaults)) return core::Setting{std::string(name), std::move(*v)};
-            return std::nullopt;
-        }
+    const KeyDef* d = find_name(name);
+    if (!d) return std::nullopt;
+    if (auto v = d->read(defaults)) return core::Setting{std::string(name), std::move(*v)};
     return std::nullopt;
 }
 

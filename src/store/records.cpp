@@ -65,6 +65,23 @@ std::vector<core::Setting> get_settings(ByteReader& r) {
     return out;
 }
 
+// A list of seeds: its count, then each. Read back with the count checked against the bytes left.
+void put_seeds(ByteWriter& w, const std::vector<std::uint64_t>& seeds) {
+    w.u32(static_cast<std::uint32_t>(seeds.size()));
+    for (auto s : seeds)
+        w.u64(s);
+}
+
+std::vector<std::uint64_t> get_seeds(ByteReader& r) {
+    const std::uint32_t n = r.u32();
+    if (static_cast<std::uint64_t>(n) * 8 > r.remaining())
+        r.fail("a realization count of " + std::to_string(n) + " exceeds the bytes left");
+    std::vector<std::uint64_t> seeds(n);
+    for (auto& s : seeds)
+        s = r.u64();
+    return seeds;
+}
+
 // The plan's sections after the seeds: settings (no marker: records ended after the seeds
 // before them), then a format number and what it adds.
 constexpr std::uint32_t plan_format_limits = 2;
@@ -79,9 +96,7 @@ void put(ByteWriter& w, const CampaignPlan& p) {
         w.f64(pt.D_cm);
         w.f64(pt.theta_deg);
         w.i32(pt.particles);
-        w.u32(static_cast<std::uint32_t>(pt.seeds.size()));
-        for (auto s : pt.seeds)
-            w.u64(s);
+        put_seeds(w, pt.seeds);
     }
     // Typed settings (added later, after every point, so that records written before them end
     // here and read back with empty vectors): per point its settings, then its parameters.
@@ -109,12 +124,7 @@ CampaignPlan get_plan(ByteReader& r) {
         pt.D_cm = r.f64();
         pt.theta_deg = r.f64();
         pt.particles = r.i32();
-        const std::uint32_t ns = r.u32();
-        if (static_cast<std::uint64_t>(ns) * 8 > r.remaining())
-            r.fail("a realization count of " + std::to_string(ns) + " exceeds the bytes left");
-        pt.seeds.resize(ns);
-        for (auto& s : pt.seeds)
-            s = r.u64();
+        pt.seeds = get_seeds(r);
     }
     if (r.remaining() > 0)
         for (auto& pt : p.points) {
@@ -297,9 +307,7 @@ Bytes encode(const AllotmentRecord& r) {
     for (const auto& p : r.points) {
         w.str(p.label);
         w.i32(p.first);
-        w.u32(static_cast<std::uint32_t>(p.seeds.size()));
-        for (auto s : p.seeds)
-            w.u64(s);
+        put_seeds(w, p.seeds);
     }
     return w.take();
 }
@@ -314,12 +322,7 @@ AllotmentRecord decode_allotment(std::span<const std::uint8_t> b) {
         p.label = in.str();
         p.first = in.i32();
         if (p.first < 0) in.fail("a negative first realization " + std::to_string(p.first));
-        const std::uint32_t ns = in.u32();
-        if (static_cast<std::uint64_t>(ns) * 8 > in.remaining())
-            in.fail("a realization count of " + std::to_string(ns) + " exceeds the bytes left");
-        p.seeds.resize(ns);
-        for (auto& s : p.seeds)
-            s = in.u64();
+        p.seeds = get_seeds(in);
     }
     in.expect_end();
     return r;

@@ -206,8 +206,8 @@ TEST(CampaignCli, SubmitDryRunWarnsWhenTheChainCannotFinish) {
 // "D_cm=2.7 theta_deg=45 hopper.particles=3" for 300 disks (and would for 3000).
 TEST(CampaignCli, DryRunShowsWholeLabels) {
     const fs::path heads = source_dir / "campaigns" / "open-question" / "head-scan.toml";
-    const Outcome r = campaign("run " + quote(heads) + " --dry-run --store " +
-                               quote(scratch() / "h.h5"));
+    const Outcome r =
+        campaign("run " + quote(heads) + " --dry-run --store " + quote(scratch() / "h.h5"));
     ASSERT_EQ(r.code, 0) << r.err;
     for (const char* n : {"300", "500", "700", "1500"})
         EXPECT_NE(r.out.find(std::string("D_cm=2.7 theta_deg=45 hopper.particles=") + n + " "),
