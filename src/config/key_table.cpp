@@ -394,6 +394,12 @@ const KeyDef* find_name(std::string_view name) {
     return nullptr;
 }
 
+const KeyDef* quoted_dotted_key(std::string_view name) {
+    const auto dot = name.find('.');
+    if (dot == std::string_view::npos || !is_scene_section(name.substr(0, dot))) return nullptr;
+    return find_key(name.substr(0, dot), name.substr(dot + 1));
+}
+
 std::vector<std::string> keys_of(std::string_view section) {
     std::vector<std::string> out;
     for (const auto& d : key_table())

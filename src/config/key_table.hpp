@@ -34,6 +34,9 @@ inline constexpr std::array<std::string_view, 6> scene_sections = {
 bool is_scene_section(std::string_view s);
 const KeyDef* find_key(std::string_view section, std::string_view key);
 const KeyDef* find_name(std::string_view name);
+// The row a quoted key such as "material.mu" names (TOML reads it as one key with a dot in it,
+// not as mu inside material; users mean the latter), or nullptr when it names none.
+const KeyDef* quoted_dotted_key(std::string_view name);
 std::vector<std::string> keys_of(std::string_view section);
 
 // Canonical order of settings: D_cm, theta_deg, then by name.
