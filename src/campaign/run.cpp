@@ -6,6 +6,7 @@
 #include <atomic>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -532,21 +533,35 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
     std::snprintf(line, line_size, "%-*s %9s %7s %7s %12s %11s\n", width, "point", "particles",
                   "stored", "to run", "s/realiz.", "core-hours");
     out << line;
+    // With a target, what the run would do now: its rounds replayed from the stored results
+    // (as `campaign run` and `campaign status` do), not the store's plan, which a journal
+    // written before issue 29 fills with every seed up to max_realizations.
+    std::optional<RoundState> rounds;
+    std::vector<int> missing(spec.points.size(), 0);
+    if (spec.target) {
+        std::map<std::string, PointResults> results;
+        if (existing)
+            for (auto& r : store::read_journal_realizations(store_path))
+                results[r.label][r.record.realization] = std::move(r.result);
+        std::vector<double> expected;
+        for (const auto& pt : spec.points)
+            expected.push_back(expected_cost(pt.scene));
+        rounds = replay_rounds(spec, results, expected);
+        if (!rounds->finished)
+            for (const auto& [p, i] : rounds->missing)
+                ++missing[std::size_t(p)];
+    }
     double total_h = 0.0;
     int total_runs = 0;
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
         const auto& pt = spec.points[p];
         const store::PointStatus* ps = stored_status(pt);
-        // Planned now: every realization, or with a target the current round's allotment (the
-        // first round's, or what the store's rounds allotted), not max_realizations (issue 29).
-        int planned = pt.realizations;
-        if (spec.target)
-            planned = std::max(first_allotment(spec, pt),
-                               ps ? std::min(ps->planned, pt.realizations) : 0);
         // Stored results (failed ones included) count from the lowest index.
         const int results = ps ? ps->done + ps->failed - ps->errors : 0;
-        const int stored = std::clamp(results, 0, planned);
-        const int to_run = planned - stored;
+        // Planned now: every realization, or with a target what the current round still lacks
+        // (not max_realizations, issue 29).
+        const int stored = std::clamp(results, 0, pt.realizations);
+        const int to_run = rounds ? missing[p] : pt.realizations - stored;
         const double each = measured ? cost[p] * per_cost : prior[p];
         const double hours = to_run * each / 3600.0;
         total_h += hours;

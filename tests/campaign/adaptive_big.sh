@@ -25,6 +25,13 @@ if [ "${1:-}" = old ]; then
     [ -e old.h5.journal ] && [ ! -e old.h5 ] || fail "the fixture is a journal alone"
     run_expect 0 old_status "$EXE" status old.h5 --json
     expect_in old_status.out '"done": 3'
+    # The dry run plans what the run will do (the current round's missing realizations, as
+    # status says), not every seed the old journal lists (it said 5 where 1 runs).
+    pending=$("$PY" -c 'import json,sys; print(json.load(open(sys.argv[1]))["pending"])' old_status.out)
+    run_expect 0 old_dry "$EXE" run small.toml --store old.h5 --dry-run
+    total=$(awk '$1 == "total" {print $2}' old_dry.out)
+    [ -n "$pending" ] && [ "$total" = "$pending" ] ||
+        { cat old_dry.out >&2; fail "the dry run plans ${total:-?}, status says ${pending:-?} pending"; }
     run_expect 0 small "$EXE" run small.toml --store small.h5 --progress-interval 0
     run_expect 0 old "$EXE" run small.toml --store old.h5 --progress-interval 0
     digest small.h5 small.digest
