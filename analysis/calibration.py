@@ -6,6 +6,7 @@ usage:
   /usr/bin/python3 analysis/calibration.py targets STORE.h5 [STORE.h5 ...] [--out DIR]
   /usr/bin/python3 analysis/calibration.py beverloo STORE.h5 [--out DIR]
   /usr/bin/python3 analysis/calibration.py curves NAME=STORE.h5 [NAME=STORE.h5 ...] [--out DIR]
+  /usr/bin/python3 analysis/calibration.py profile NAME=STORE.h5 [NAME=STORE.h5 ...] [--out DIR]
 
 sensitivity  a store of campaigns/calibration/sensitivity.toml: per wall angle, the discharge rate
              (particles/s over the 20-80 % part of the exits) of every point, its change against
@@ -29,6 +30,11 @@ curves       stores of campaigns/calibration/flow-curve-*.toml, one per candidat
              C phi = A <a> / sqrt(g) it implies (<a> the mean disk area), the outlet velocity
              at the settled packing fraction, and each outlet's rate against the published
              mean rate N / T_empty (PUBLISHED_EMPTY below). Writes flow_curves.md, .json, .png.
+profile      stores of full discharges (published protocol, emptied realizations): per candidate
+             and outlet the discharge rate in each tenth of the discharge (875 exits of 8750),
+             against the flowing time (the jammed periods, from a jam's onset to the restart
+             after it, left out), its mean over the realizations, and the whole discharge's
+             N / T_empty: how the rate falls as the hopper empties. Writes profile.md, .json.
 
 A point's settings are read from the store's canonical scene text (/points/scene), never from
 its label. Needs Debian's python3-h5py, -numpy, -scipy and -matplotlib.
@@ -488,6 +494,74 @@ def curves(args):
     print("wrote " + os.path.join(out, "flow_curves.png"))
 
 
+def flowing_times(exits, onsets, survival, t_end):
+    """Each exit's time on the flowing clock: the discharge time less the jammed periods before
+    it. A jammed period runs from a jam's onset to the restart after it, which is the next
+    interval's end less its length (survival[k] runs from the restart to onsets[k], the last,
+    censored one to t_end)."""
+    ends = list(onsets) + [t_end]
+    restarts = [ends[k + 1] - survival[k + 1] for k in range(len(onsets))]
+    t = np.array(exits, dtype=float)
+    lost = np.zeros_like(t)
+    for on, re in zip(onsets, restarts):
+        lost += np.clip(t - on, 0.0, max(re - on, 0.0))
+    return t - lost
+
+
+def profile(args):
+    import json
+
+    rows, out_json = [], []
+    for spec in args.stores:
+        name, _, paths = spec.partition("=")
+        if not paths:
+            fail("profile takes NAME=STORE.h5 arguments, got '%s'" % spec)
+        for path in paths.split("+"):
+            if not os.path.exists(path):
+                fail("no store at '%s'" % path)
+            with h5py.File(path, "r") as f:
+                scenes = [parse_scene(t) for t in f["points/scene"].asstr()[:]]
+                r, g = f["realizations"], f["ragged"]
+                cols = {k: r[k][:] for k in ("point", "has_empty_time", "empty_time", "exit_start",
+                                             "exit_length", "jam_start", "jam_length",
+                                             "survival_start", "survival_length")}
+                X, J, S = g["exit_times"][:], g["jam_onsets"][:], g["survival_times"][:]
+            by_point = {}
+            for i in range(len(cols["point"])):
+                if not cols["has_empty_time"][i]:
+                    continue
+                x = np.sort(X[cols["exit_start"][i]:cols["exit_start"][i] + cols["exit_length"][i]])
+                on = J[cols["jam_start"][i]:cols["jam_start"][i] + cols["jam_length"][i]]
+                sv = S[cols["survival_start"][i]:cols["survival_start"][i] + cols["survival_length"][i]]
+                if len(x) < 100 or len(sv) != len(on) + 1:
+                    continue
+                t = flowing_times(x, on, sv, cols["empty_time"][i])
+                edges = np.linspace(0, len(t), 11).round().astype(int)
+                start = np.concatenate([[0.0], t])  # the flowing clock at the k-th exit's start
+                rate = [(b - a) / (start[b] - start[a]) for a, b in zip(edges[:-1], edges[1:])]
+                by_point.setdefault(int(cols["point"][i]), []).append(
+                    (rate, len(x) / cols["empty_time"][i]))
+            for p, vals in sorted(by_point.items(), key=lambda kv: D_cm(scenes[kv[0]])):
+                R = np.array([v[0] for v in vals])
+                whole = np.array([v[1] for v in vals])
+                m = R.mean(axis=0)
+                rows.append("| %s | %g | %g | %d | %s | %.1f |" % (
+                    name, theta_deg(scenes[p]), D_cm(scenes[p]), len(vals),
+                    " | ".join("%.0f" % v for v in m), whole.mean()))
+                out_json.append({"candidate": name, "theta_deg": theta_deg(scenes[p]),
+                                 "D_cm": D_cm(scenes[p]), "realizations": len(vals),
+                                 "rate_per_tenth": m.tolist(), "N_over_T": whole.mean()})
+    if not rows:
+        fail("no emptied realization with its exits in the stores given")
+    head = ("| candidate | theta | D (cm) | n | " + " | ".join("%d-%d %%" % (10 * k, 10 * k + 10)
+                                                             for k in range(10)) + " | N / T |")
+    text = ("# The discharge rate through each tenth of the discharge (1/s, flowing time)\n\n" +
+            head + "\n" + "|---" * 15 + "|\n" + "\n".join(rows) + "\n")
+    write(args.out or ".", "profile.md", text)
+    write(args.out or ".", "profile.json", json.dumps(out_json, indent=1) + "\n")
+    sys.stdout.write(text)
+
+
 def main():
     ap = argparse.ArgumentParser(prog="calibration.py", description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -507,6 +581,10 @@ def main():
     d.add_argument("stores", nargs="+")
     d.add_argument("--out")
     d.set_defaults(run=curves)
+    e = sub.add_parser("profile")
+    e.add_argument("stores", nargs="+")
+    e.add_argument("--out")
+    e.set_defaults(run=profile)
     args = ap.parse_args()
     try:
         args.run(args)

@@ -4,7 +4,8 @@
 the targets table gives each published empty time's ratio for stores whose empty times are the
 published ones times a known factor; the sensitivity table gives each choice's rate change against
 the reference and the seed noise; the flow curves per candidate give each outlet's rate against the
-published mean rate and recover A, k and C phi; bad arguments exit 2 with a message.
+published mean rate and recover A, k and C phi; the rate profile of a discharge gives each tenth's
+rate on the flowing clock (a jammed period left out); bad arguments exit 2 with a message.
 
 usage: test_calibration.py SOURCE_DIR     (exit 0 pass, 1 fail, 77 skipped: no h5py/scipy)
 """
@@ -118,6 +119,27 @@ check("4 of 16 targets, largest error 5.0 %, rms 4.8 %, 1 within tolerance" in o
 # The theta = 60 deg targets are not in the store: shown as missing, not invented.
 row60 = [l for l in out.splitlines() if l.startswith("| 60 | 4.5 | 0.5, 0.5 |")]
 check(len(row60) == 1 and row60[0].endswith(" - | 0 | - | - |"), "a missing target shows '-'")
+
+# --- Profile: one emptied realization of 1000 disks at D = 2.7 cm: 500 exits at 100 /s, a jam at
+# t = 5 s cleared at t = 6 s (a jammed second that the flowing clock leaves out), then 500 exits at
+# 50 /s until t = 16 s. Tenths 1-5 give 100 /s, tenths 6-10 50 /s; N / T = 1000 / 16 = 62.5 /s.
+prof = os.path.join(work, "prof.h5")
+make_store(prof, [("D_cm=2.7", scene(**{"hopper.outlet_m": 0.027}), [(1, None, 16.0)])])
+with h5py.File(prof, "a") as f:
+    exits = np.concatenate([np.arange(1, 501) / 100.0, 6.0 + np.arange(1, 501) / 50.0])
+    r = f["realizations"]
+    for name, start, length in (("exit", 0, 1000), ("jam", 0, 1), ("survival", 0, 2)):
+        r[name + "_start"] = np.array([start], np.uint64)
+        r[name + "_length"] = np.array([length], np.uint64)
+    f["ragged/exit_times"] = exits
+    f["ragged/jam_onsets"] = np.array([5.0])
+    f["ragged/survival_times"] = np.array([5.0, 10.0])
+rc, out, err = run("profile", "x=" + prof, "--out", work)
+check(rc == 0, "profile exits 0 (got %d: %s)" % (rc, err))
+want = "| x | 45 | 2.7 | 1 | " + " | ".join(["100"] * 5 + ["50"] * 5) + " | 62.5 |"
+check(want in out, "profile row: want %r in %s" % (want, out))
+rc, out, err = run("profile", prof)
+check(rc == 2 and "NAME=STORE.h5" in err, "profile without NAME= exits 2 (got %d: %s)" % (rc, err))
 
 # --- Sensitivity at 45 deg, D = 4.5 cm: the reference with three seeds (rates 500, 510, 520: mean
 # 510, sd 10) and one choice with rate 561 (+10 %, +5.1 noise, implied empty time -9.1 %).
