@@ -47,6 +47,9 @@ import sys
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hopper_store import readable  # noqa: E402
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -106,9 +109,12 @@ class Store:
         if not os.path.exists(path):
             fail("no store at '%s'" % path)
         try:
-            f = h5py.File(path, "r")
+            with readable(path) as now:  # a snapshot while a run writes the store
+                self._read(path, h5py.File(now, "r"))
         except OSError as e:
             fail("cannot open '%s' as an HDF5 store: %s" % (path, e))
+
+    def _read(self, path, f):
         if "points" not in f or "realizations" not in f:
             fail("'%s' is not a hopper store (no /points or /realizations)" % path)
         self.path = path
@@ -519,7 +525,7 @@ def profile(args):
         for path in paths.split("+"):
             if not os.path.exists(path):
                 fail("no store at '%s'" % path)
-            with h5py.File(path, "r") as f:
+            with readable(path) as now, h5py.File(now, "r") as f:
                 scenes = [parse_scene(t) for t in f["points/scene"].asstr()[:]]
                 r, g = f["realizations"], f["ragged"]
                 cols = {k: r[k][:] for k in ("point", "has_empty_time", "empty_time", "exit_start",

@@ -30,6 +30,7 @@ moment (docs/store.md, "Reading a store during a run"): it runs `campaign export
 --snapshot` with the executable named by $HOPPER_CAMPAIGN, else `campaign` on PATH, else the
 source tree's build/src/cli/campaign. The snapshot is removed by close().
 """
+import contextlib
 import fcntl
 import math
 import os
@@ -42,7 +43,7 @@ import h5py
 import numpy as np
 import pandas as pd
 
-__all__ = ["open_store", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
+__all__ = ["open_store", "readable", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
 
 # Scene parameter -> (short symbol for legends, unit shown, factor from the stored SI value).
 # Parameters not listed are shown by their name and stored value.
@@ -639,13 +640,8 @@ def campaign_executable():
     return os.path.normpath(here) if os.access(here, os.X_OK) else None
 
 
-def open_store(path):
-    """Opens a store for reading (see the module's help). During a run (or after a killed one,
-    before the next run repairs the file) it reads a snapshot of the journal instead of the
-    HDF5 file, which the writer holds and which lags behind the journal."""
-    path = str(path)
-    if not os.path.exists(path + ".journal") or (not writer_active(path) and _in_step(path)):
-        return Store(path)
+def _snapshot(path):
+    """A snapshot of the store's journal in a new temporary directory: (directory, file)."""
     exe = campaign_executable()
     if exe is None:
         raise OSError("'%s' is being written by a `campaign run` (or its last run was "
@@ -658,6 +654,37 @@ def open_store(path):
     if done.returncode != 0:
         tmp.cleanup()
         raise OSError("cannot take a snapshot of '%s': %s" % (path, done.stderr.strip()))
+    return tmp, view
+
+
+def _needs_snapshot(path):
+    return os.path.exists(path + ".journal") and (writer_active(path) or not _in_step(path))
+
+
+@contextlib.contextmanager
+def readable(path):
+    """A path that h5py can open now with the store's content: the store itself, or while a
+    `campaign run` writes it (or after a killed run) a snapshot of its journal, removed when
+    the block ends. For scripts that read the HDF5 layout directly."""
+    path = str(path)
+    if not _needs_snapshot(path):
+        yield path
+        return
+    tmp, view = _snapshot(path)
+    try:
+        yield view
+    finally:
+        tmp.cleanup()
+
+
+def open_store(path):
+    """Opens a store for reading (see the module's help). During a run (or after a killed one,
+    before the next run repairs the file) it reads a snapshot of the journal instead of the
+    HDF5 file, which the writer holds and which lags behind the journal."""
+    path = str(path)
+    if not _needs_snapshot(path):
+        return Store(path)
+    tmp, view = _snapshot(path)
     s = Store(view)
     s.path = path
     s._snapshot_dir = tmp
