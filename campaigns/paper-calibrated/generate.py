@@ -121,9 +121,10 @@ def main():
         with open(os.path.join(CALIBRATION, stem + "-calibrated.toml"), "w") as fh:
             fh.write(calibrate(text, stem + "-spec.toml", "campaigns/calibration"))
         print("wrote campaigns/calibration/%s-calibrated.toml" % stem)
-    # Per candidate: its flow curve, and (but for the calibrated model, whose targets file is
-    # written above) its eleven large-outlet targets, paired with targets-spec.toml.
-    for stem, skip in (("flow-curve", ()), ("targets", ("calibrated",))):
+    # Per candidate: its flow curve, its empty times at the eight outlets, and (but for the
+    # calibrated model, whose targets file is written above) its eleven large-outlet targets,
+    # each paired with its -spec file.
+    for stem, skip in (("flow-curve", ()), ("targets", ("calibrated",)), ("empty-times", ())):
         with open(os.path.join(CALIBRATION, stem + "-spec.toml")) as fh:
             text = fh.read()
         for candidate, choices in CANDIDATES.items():
