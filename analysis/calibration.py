@@ -18,7 +18,7 @@ targets      stores of campaigns/calibration/targets-*.toml: each of the sixteen
              times (the eleven of issue 11 and the five at D <= 3.5 cm of issue 24) against the
              store's mean (its standard error, the realizations, ratio, relative error, and
              whether it is within issue 24's tolerance: 5 % at D <= 3.5 cm, 3 % above), one
-             column per argument;
+             column per argument (NAME=A.h5 names the column);
              an argument A.h5+B.h5 joins stores that hold different points of one variant.
              Writes targets.md.
 beverloo     a store of a D scan at one wall angle (campaigns/calibration/beverloo-*.toml; A.h5+B.h5
@@ -256,7 +256,12 @@ class Joined:
     """Several stores of one variant (different points) seen as one."""
 
     def __init__(self, spec):
-        self.parts = [Store(p) for p in spec.split("+")]
+        # "NAME=A.h5+B.h5" names the column NAME; without a name it is the first store's file name
+        name, sep, paths = spec.partition("=")
+        if not sep or "/" in name or name.endswith(".h5"):
+            name, paths = "", spec
+        self.parts = [Store(p) for p in paths.split("+")]
+        self.name = name or os.path.basename(paths.split("+")[0])
         self.settings = [s for st in self.parts for s in st.settings]
 
     def empty_times(self, key):
@@ -272,8 +277,8 @@ def targets(args):
     stores = [Joined(p) for p in args.stores]
     header = "| theta | D (cm) | particles e_n, mu | walls e_n, mu | published (s) | tolerance |"
     sep = "|---|---|---|---|---|---|"
-    for p in args.stores:
-        header += " %s (s) | n | ratio | error |" % os.path.basename(p)
+    for st in stores:
+        header += " %s (s) | n | ratio | error |" % st.name
         sep += "---|---|---|---|"
     lines = ["# The %d published empty times" % len(TARGETS), "", header, sep]
     worst = [0.0] * len(stores)
@@ -299,9 +304,9 @@ def targets(args):
                                                         "ok" if ok else "out")
         lines.append(row)
     lines.append("")
-    for k, p in enumerate(args.stores):
+    for k, p in enumerate(st.name for st in stores):
         if sq[k]:
-            lines.append("- `%s`: %d of %d targets, largest error %.1f %%, rms %.1f %%, %d within "
+            lines.append("- %s: %d of %d targets, largest error %.1f %%, rms %.1f %%, %d within "
                          "tolerance" % (p, len(sq[k]), len(TARGETS), 100 * worst[k],
                                         100 * np.sqrt(np.mean(sq[k])), within[k]))
     text = "\n".join(lines) + "\n"

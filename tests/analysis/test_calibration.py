@@ -116,6 +116,9 @@ for D, T in published.items():
         check(want in row[0], "targets row for D = %g: want %r in %s" % (D, want, row[0]))
 check("4 of 16 targets, largest error 5.0 %, rms 4.8 %, 1 within tolerance" in out,
       "targets summary line: %s" % out.strip().splitlines()[-1])
+rc, out, err = run("targets", "mine=" + os.path.join(work, "tgt.h5"), "--out", work)
+check(rc == 0 and "| mine (s) | n | ratio | error |" in out and "- mine: 4 of 16" in out,
+      "targets names a column NAME=STORE.h5 (got %d: %s)" % (rc, out[:300]))
 # The theta = 60 deg targets are not in the store: shown as missing, not invented.
 row60 = [l for l in out.splitlines() if l.startswith("| 60 | 4.5 | 0.5, 0.5 |")]
 check(len(row60) == 1 and row60[0].endswith(" - | 0 | - | - |"), "a missing target shows '-'")
