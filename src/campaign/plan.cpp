@@ -30,18 +30,51 @@ std::map<std::string, std::string> by_name(const std::vector<core::Setting>& set
 // The parameters in which two points of different physics differ, one "\n    name = value
 // (store: value)" line each.
 std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& stored) {
-    if (mine.parameters.empty() || stored.parameters.empty())
-        return "\n    (the physics text differs; the store's sweep file cannot be read back to "
-               "name the parameter)";
-    const auto a = by_name(mine.parameters), b = by_name(stored.parameters);
     std::string diff;
+    if (!mine.parameters.empty() && !stored.parameters.empty()) {
+        const auto a = by_name(mine.parameters), b = by_name(stored.parameters);
+        for (const auto& [k, v] : a) {
+            const auto it = b.find(k);
+            if (it == b.end()) {
+                // A parameter newer than the store is its physics at the default (issue 28).
+                const auto def = config::default_parameter(k);
+                if (def && config::value_text(*def) == v) continue;
+            }
+            const std::string old = it == b.end() ? "absent" : it->second;
+            if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
+        }
+        for (const auto& [k, v] : b)
+            if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+    }
+    if (!diff.empty()) return diff;
+    // No sweep parameter differs: name the physics text's lines that do.
+    const auto lines = [](const std::string& text) {
+        std::map<std::string, std::string> m;
+        std::size_t at = 0;
+        while (at < text.size()) {
+            const std::size_t end = std::min(text.find('\n', at), text.size());
+            const std::string line = text.substr(at, end - at);
+            const std::size_t eq = line.find('=');
+            if (eq != std::string::npos) m[line.substr(0, eq)] = line.substr(eq + 1);
+            at = end + 1;
+        }
+        return m;
+    };
+    const auto a = lines(mine.scene), b = lines(stored.scene);
     for (const auto& [k, v] : a) {
         const auto it = b.find(k);
-        const std::string old = it == b.end() ? "absent" : it->second;
-        if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
+        if (it == b.end() || it->second != v)
+            diff += "\n    " + k + " = " + v +
+                    " (store: " + (it == b.end() ? "absent" : it->second) + ")";
     }
     for (const auto& [k, v] : b)
         if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+    if (a.count("protocol.reinsertion") && !b.count("protocol.reinsertion"))
+        diff +=
+            "\n    (the store was written before the fix of the steady state's springs, "
+            "CHANGELOG: there every re-insertion reset every tangential spring; finish it "
+            "with the version that wrote it, which `campaign status` names, or start a new "
+            "store)";
     return diff.empty() ? "\n    (the physics text differs in a value no sweep key sets)" : diff;
 }
 

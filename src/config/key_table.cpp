@@ -346,6 +346,15 @@ const std::vector<KeyDef> table = {
            [](P& p, V v) { p.fields.kernel_width = num(v); },
            [](const P& p) -> Read { return p.fields.kernel_width; },
            FP{"fields.kernel_width_dlarge", 62, Enters::always, "fields.kernel"}},
+    // Not a key of the sweep file: how a re-inserted particle meets the springs of the packing
+    // (the steady state only). Before this line existed every re-insertion reset every
+    // tangential spring (a fault, fixed in round 3); the line keeps stores written then from
+    // being resumed with the fixed engine, which would mix the two in one point.
+    KeyDef{"", "reinsertion", "protocol.reinsertion", Kind::choice, 0, 0, closed, closed, "",
+           [](P&, V) {},
+           [](const P&) -> Read { return std::string("keeps_springs"); },
+           FP{"protocol.reinsertion", 63, Enters::always, "protocol.mode"}, nullptr, "keeps_springs",
+           false},
     // Not a key of the sweep file: standard gravity, in every fingerprint.
     KeyDef{"", "gravity_m_s2", "gravity_m_s2", Kind::real, 0, 1e3, open, closed, "m/s^2",
            [](P& p, V v) { p.gravity = num(v); },

@@ -247,8 +247,11 @@ void System::save_history() {
     hist_partner_.clear();
     hist_x_.clear();
     hist_y_.clear();
-    if (!history_ || pstart_.size() != x_.size() + 1) return;
-    const std::size_t n = x_.size();
+    // The list's rows are the particles it was built for: those added since (the steady state's
+    // re-insertions) come after them and have no springs yet. Comparing the row count with
+    // the grown particle count instead dropped every spring at each re-insertion (round 3).
+    if (!history_ || pstart_.empty() || pstart_.size() > x_.size() + 1) return;
+    const std::size_t n = pstart_.size() - 1;
     auto each_spring = [&](auto&& fn) {
         for (std::size_t i = 0; i < n; ++i) {
             for (int k = pstart_[i]; k < pstart_[i + 1]; ++k)

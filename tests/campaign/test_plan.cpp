@@ -224,6 +224,30 @@ TEST(Plan, TargetCampaignListsItsFirstRoundAndItsLimitNotMaxRealizations) {
     EXPECT_TRUE(check_compatible(plan, plan).empty());
 }
 
+// The steady state's springs (round 3): a store whose steady-state points were written before
+// the fix (every re-insertion reset every tangential spring) has no protocol.reinsertion line
+// and is refused, naming the line and the fault; published-protocol points have no such line
+// and resume as before.
+TEST(Plan, SteadyStateStoresBeforeTheSpringFixAreRefused) {
+    std::string base = sweep_text;
+    base.replace(base.find("[protocol]"), 10, "[protocol]\nmode = \"steady_state\"");
+    const auto now = make_plan(sweep("", base).campaign);
+    ASSERT_FALSE(now.points.empty());
+    const std::string line = "protocol.reinsertion=keeps_springs\n";
+    EXPECT_NE(now.points[0].scene.find(line), std::string::npos) << now.points[0].scene;
+    EXPECT_EQ(make_plan(sweep().campaign).points[0].scene.find("protocol.reinsertion"),
+              std::string::npos);
+    auto before = now;  // the same points as a store written before the fix had them
+    for (auto& p : before.points)
+        p.scene.erase(p.scene.find(line), line.size());
+    const std::string msg = refusal(before, now);
+    EXPECT_NE(msg.find("protocol.reinsertion = keeps_springs (store: absent)"), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("every re-insertion reset every tangential spring"), std::string::npos)
+        << msg;
+    EXPECT_EQ(refusal(now, now), "(accepted)");
+}
+
 TEST(Plan, ExtensionIsAccepted) {
     const auto stored = make_plan(sweep().campaign);
     EXPECT_TRUE(check_compatible(stored, stored).empty());
