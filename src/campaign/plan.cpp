@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string_view>
 #include <variant>
 
@@ -30,26 +31,32 @@ std::map<std::string, std::string> by_name(const std::vector<core::Setting>& set
 // The parameters in which two points of different physics differ, one "\n    name = value
 // (store: value)" line each.
 std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& stored) {
-    std::string diff;
-    if (!mine.parameters.empty() && !stored.parameters.empty()) {
-        const auto a = by_name(mine.parameters), b = by_name(stored.parameters);
+    using Values = std::map<std::string, std::string>;
+    // "\n    name = value (store: value)" for each name whose value differs, unless `same`.
+    const auto compare = [](const Values& a, const Values& b, auto same) {
+        std::string out;
         for (const auto& [k, v] : a) {
             const auto it = b.find(k);
-            if (it == b.end()) {
-                // A parameter newer than the store is its physics at the default (issue 28).
-                const auto def = config::default_parameter(k);
-                if (def && config::value_text(*def) == v) continue;
-            }
             const std::string old = it == b.end() ? "absent" : it->second;
-            if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
+            if (old != v && !same(k, v, it == b.end()))
+                out += "\n    " + k + " = " + v + " (store: " + old + ")";
         }
         for (const auto& [k, v] : b)
-            if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
-    }
+            if (!a.count(k)) out += "\n    " + k + " absent (store: " + v + ")";
+        return out;
+    };
+    std::string diff;
+    if (!mine.parameters.empty() && !stored.parameters.empty())
+        // A parameter newer than the store is its physics at the default (issue 28).
+        diff = compare(by_name(mine.parameters), by_name(stored.parameters),
+                       [](const std::string& k, const std::string& v, bool absent) {
+                           const auto def = absent ? config::default_parameter(k) : std::nullopt;
+                           return def && config::value_text(*def) == v;
+                       });
     if (!diff.empty()) return diff;
     // No sweep parameter differs: name the physics text's lines that do.
     const auto lines = [](const std::string& text) {
-        std::map<std::string, std::string> m;
+        Values m;
         std::size_t at = 0;
         while (at < text.size()) {
             const std::size_t end = std::min(text.find('\n', at), text.size());
@@ -61,14 +68,7 @@ std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& s
         return m;
     };
     const auto a = lines(mine.scene), b = lines(stored.scene);
-    for (const auto& [k, v] : a) {
-        const auto it = b.find(k);
-        if (it == b.end() || it->second != v)
-            diff += "\n    " + k + " = " + v +
-                    " (store: " + (it == b.end() ? "absent" : it->second) + ")";
-    }
-    for (const auto& [k, v] : b)
-        if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+    diff = compare(a, b, [](const std::string&, const std::string&, bool) { return false; });
     if (a.count("protocol.reinsertion") && !b.count("protocol.reinsertion"))
         diff +=
             "\n    (the store was written before the fix of the steady state's springs, "

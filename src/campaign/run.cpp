@@ -6,7 +6,6 @@
 #include <atomic>
 #include <map>
 #include <numeric>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -536,7 +535,6 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
     // With a target, what the run would do now: its rounds replayed from the stored results
     // (as `campaign run` and `campaign status` do), not the store's plan, which a journal
     // written before issue 29 fills with every seed up to max_realizations.
-    std::optional<RoundState> rounds;
     std::vector<int> missing(spec.points.size(), 0);
     if (spec.target) {
         std::map<std::string, PointResults> results;
@@ -546,9 +544,9 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
         std::vector<double> expected;
         for (const auto& pt : spec.points)
             expected.push_back(expected_cost(pt.scene));
-        rounds = replay_rounds(spec, results, expected);
-        if (!rounds->finished)
-            for (const auto& [p, i] : rounds->missing)
+        const RoundState rounds = replay_rounds(spec, results, expected);
+        if (!rounds.finished)
+            for (const auto& [p, i] : rounds.missing)
                 ++missing[std::size_t(p)];
     }
     double total_h = 0.0;
@@ -561,7 +559,7 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
         // Planned now: every realization, or with a target what the current round still lacks
         // (not max_realizations, issue 29).
         const int stored = std::clamp(results, 0, pt.realizations);
-        const int to_run = rounds ? missing[p] : pt.realizations - stored;
+        const int to_run = spec.target ? missing[p] : pt.realizations - stored;
         const double each = measured ? cost[p] * per_cost : prior[p];
         const double hours = to_run * each / 3600.0;
         total_h += hours;
