@@ -19,8 +19,9 @@ targets      stores of campaigns/calibration/targets-*.toml: each of the sixteen
              store's mean (its standard error, the realizations, ratio, relative error, and
              whether it is within issue 24's tolerance: 5 % at D <= 3.5 cm, 3 % above), one
              column per argument (NAME=A.h5 names the column);
-             an argument A.h5+B.h5 joins stores that hold different points of one variant.
-             Writes targets.md.
+             an argument A.h5+B.h5 joins stores that hold different points of one variant;
+             and per column with three or more 45-degree outlets, the 2-D Beverloo fit of its
+             whole-discharge rates N / <T_empty> beside the published one. Writes targets.md.
 beverloo     a store of a D scan at one wall angle (campaigns/calibration/beverloo-*.toml; A.h5+B.h5
              joins stores holding different outlets):
              the discharge rate against D with the 2-D Beverloo fit W = A (D - k d)^(3/2)
@@ -309,9 +310,56 @@ def targets(args):
             lines.append("- %s: %d of %d targets, largest error %.1f %%, rms %.1f %%, %d within "
                          "tolerance" % (p, len(sq[k]), len(TARGETS), 100 * worst[k],
                                         100 * np.sqrt(np.mean(sq[k])), within[k]))
+    lines += whole_discharge_beverloo(stores)
     text = "\n".join(lines) + "\n"
     write(args.out or ".", "targets.md", text)
     sys.stdout.write(text)
+
+
+def whole_discharge_beverloo(stores):
+    """The 2-D Beverloo fit of each column's whole-discharge mean rates N / <T_empty> at the
+    45-degree targets (the published flow curve's own measure), beside the published fit."""
+    pub = sorted(k for k in TARGETS if k[0] == 45.0)
+    Dp = np.array([k[1] for k in pub])
+    Wp = PUBLISHED_N / np.array([TARGETS[k] for k in pub])
+    out = ["", "Whole-discharge Beverloo fit (theta = 45 deg): W = N / <T_empty> = A (D - k d)^(3/2) "
+           "at the outlets with an empty time (their standard errors as weights; a single "
+           "realization gets the median relative error of the others, or 1 %); C phi = A <a> / "
+           "sqrt(g). The published fit is unweighted.", "",
+           "| column | outlets | A (1/s/cm^1.5) | k | corr(A, k) | C phi |", "|---|---|---|---|---|---|"]
+    ref = None
+    rows = []
+    for st in stores:
+        D, W, sW = [], [], []
+        for key in pub:
+            v = st.empty_times(key)
+            if len(v) == 0:
+                continue
+            m, e, n = mean_err(v)
+            s = next(s for part in st.parts for s in part.settings if target_key(s) == key)
+            ref = ref or s
+            N = num(s, "particles.count")
+            D.append(key[1])
+            W.append(N / m)
+            sW.append(N * e / m ** 2 if n > 1 and np.isfinite(e) and e > 0 else np.nan)
+        if len(D) >= 3:
+            rows.append((st.name, np.array(D), np.array(W), np.array(sW)))
+    if ref is None:
+        return []
+    d_mean, area = mean_diameter_area(ref)
+    A, k, cov, _, _ = fit_beverloo(Dp, Wp, None, d_mean)
+    fits = [("published", len(Dp), A, k, cov)]
+    for name, D, W, sW in rows:
+        rel = np.nanmedian(sW / W) if np.any(np.isfinite(sW)) else 0.01
+        sW = np.where(np.isfinite(sW), sW, rel * W)
+        A, k, cov, _, _ = fit_beverloo(D, W, sW, d_mean)
+        fits.append((name, len(D), A, k, cov))
+    for name, n, A, k, cov in fits:
+        eA, ek = np.sqrt(np.diag(cov))
+        out.append("| %s | %d | %.1f +- %.1f | %.3f +- %.3f | %+.3f | %.3f +- %.3f |"
+                   % (name, n, A, eA, k, ek, cov[0, 1] / (eA * ek), A * area / np.sqrt(G_CM),
+                      eA * area / np.sqrt(G_CM)))
+    return out
 
 
 def beverloo(args):
