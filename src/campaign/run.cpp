@@ -402,20 +402,6 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 
-    const std::string reason = rep.stopped              ? "interrupted by " + rep.stop_reason
-                               : !rep.fail_fast.empty() ? "stopped early: " + rep.fail_fast
-                                                        : std::string("complete");
-    st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
-                                   rep.cpu_seconds, rep.lost_worker_seconds,
-                                   rep.saved_worker_seconds});
-
-    const store::StoreStatus status = st.status();
-    std::vector<std::string> labels;
-    for (const auto& p : spec.points)
-        labels.push_back(p.label);
-    write_summary(out, status, labels);
-    out.flush();
-
     int left = 0, failed = 0;
     {
         const auto have = allotments(st);  // the rounds may have grown them
@@ -431,6 +417,28 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             }
         }
     }
+    // A stop request that came after the last realization had been handed out, and that it
+    // outlived (Slurm's warning signal at the very end of a run, say), stopped nothing: the run
+    // is complete, not "interrupted", and nothing is left to resume. With a target the rounds
+    // decide whether more realizations are due, so a stop there stays a stop.
+    const bool stopped = rep.stopped && !(left == 0 && rep.interrupted == 0 && !spec.target);
+    if (rep.stopped && !stopped)
+        err << "campaign: " << rep.stop_reason << " came after the last realization was handed "
+            << "out, and it finished: the run is complete" << std::endl;
+    const std::string reason = stopped                  ? "interrupted by " + rep.stop_reason
+                               : !rep.fail_fast.empty() ? "stopped early: " + rep.fail_fast
+                                                        : std::string("complete");
+    st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
+                                   rep.cpu_seconds, rep.lost_worker_seconds,
+                                   rep.saved_worker_seconds});
+
+    const store::StoreStatus status = st.status();
+    std::vector<std::string> labels;
+    for (const auto& p : spec.points)
+        labels.push_back(p.label);
+    write_summary(out, status, labels);
+    out.flush();
+
     char share[64];
     std::snprintf(share, sizeof share, "%.2f%%",
                   rep.wall_seconds > 0 ? 100.0 * rep.cpu_seconds / rep.wall_seconds : 0.0);
@@ -451,7 +459,7 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             << format_duration(rep.saved_worker_seconds) << " kept in checkpoints, "
             << format_duration(rep.lost_worker_seconds) << " thrown away; " << rep.resumed
             << " realization(s) continued from a checkpoint" << std::endl;
-    if (rep.stopped) {
+    if (stopped) {
         err << "campaign: stopped by " << rep.stop_reason << "; " << left + failed
             << " realization(s) not stored yet (" << rep.interrupted
             << " interrupted). Resume with:\n  " << resume << std::endl;
