@@ -417,11 +417,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             }
         }
     }
-    // A drain that came after the last realization had been handed out, and that it outlived
-    // (Slurm's warning signal at the very end of a run, say), stopped nothing: the run is
-    // complete, not "interrupted", and nothing is left to resume. A stop sent to running
-    // realizations (SIGTERM) stays a stop, and so does any stop with a target: its rounds decide
-    // whether more realizations are due.
+    // A drain that the last realization outlived stopped nothing: complete. A stop sent to running
+    // realizations stays a stop, and so does any with a target (its rounds decide what is due).
     const bool stopped =
         rep.stopped && !(left == 0 && rep.interrupted == 0 && !spec.target && !rep.stopped_running);
     if (rep.stopped && !stopped)
