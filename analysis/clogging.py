@@ -89,67 +89,93 @@ def foot_in_groove(x, y, edge, nxt, r_wall, r_max):
     return d_e <= reach and d_n <= reach
 
 
+def arrest_summary(s, path):
+    """The arrest check of an open store (hopper_store.Store): arrests, shakes per jam,
+    where the arches rest, tau and jams per realization by group, and tau per interval
+    after an ordinary and after a grown shake."""
+    r = s.realizations
+    surv = s.survival
+    jams = s.jams
+    arches = s.arches
+    pts = s.points
+    by_status = r["status"].value_counts().to_dict()
+    grown = set()
+    for (pt, real), g in jams.groupby(["point", "realization"]):
+        if (g["shakes"] > 1).any():
+            grown.add((pt, real))
+    result = {"store": path, "realizations": int(len(r)), "by_status": by_status,
+              "shakes_needed": {int(k): int(v) for k, v in jams["shakes"].value_counts()
+                                .sort_index().items()},
+              "groups": {}}
+    # Where the arches rest: jams whose arch has both end disks in the groove between the
+    # edge disk and the next wall disk, by the shakes the jam needed.
+    feet = {}
+    if len(arches) and len(jams) == len(arches):
+        aj = arches.reset_index(drop=True)
+        jj = jams.reset_index(drop=True)
+        for k in range(len(aj)):
+            pt = pts.loc[int(aj.loc[k, "point"])]
+            edge, nxt, rw = edge_disks(pt)
+            r_max = float(pt["particles.d_large_m"]) / 2
+            xs, ys = aj.loc[k, "x"], aj.loc[k, "y"]
+            cls = "needed 1 shake" if int(jj.loc[k, "shakes"]) <= 1 else "needed more"
+            f = feet.setdefault(cls, {"jams": 0, "arches": 0, "both_feet_in_groove": 0})
+            f["jams"] += 1
+            if len(xs) >= 1:
+                f["arches"] += 1
+                if foot_in_groove(xs[0], ys[0], edge, nxt, rw, r_max) and \
+                        foot_in_groove(xs[-1], ys[-1], edge, nxt, rw, r_max):
+                    f["both_feet_in_groove"] += 1
+    result["arch_feet"] = feet
+    keys = list(zip(r["point"], r["realization"]))
+    for name, keep in (("all", lambda k: True), ("no grown shake", lambda k: k not in grown),
+                       ("grown shake", lambda k: k in grown)):
+        sel = [k for k in keys if keep(k)]
+        if not sel:
+            continue
+        mask = [(p, q) in set(sel) for p, q in zip(surv["point"], surv["realization"])]
+        sv = surv[mask]
+        tau = censored_mean(sv["duration"], sv["event"])
+        rr = r[[k in set(sel) for k in keys]]
+        n = rr["n_jams"].to_numpy(float)
+        result["groups"][name] = {
+            "realizations": len(sel), "tau": tau,
+            "jams_per_realization": float(n.mean()),
+            "jams_per_realization_se": float(n.std(ddof=1) / math.sqrt(len(n))) if len(n) > 1
+            else None,
+            "arrested": int((rr["status"] == "arrested").sum())}
+    # The comparison by realization selects: a realization with more jams has more chances
+    # to meet one that needs a grown shake, so its group has more jams and shorter intervals
+    # even when the shakes change nothing. Per interval instead: the flow that a grown shake
+    # restarted against the flow that one ordinary shake restarted (interval k follows jam
+    # k - 1; the first interval follows the opening and is in neither).
+    jj = jams.copy()
+    jj["interval"] = jj.groupby(["point", "realization"]).cumcount() + 1
+    after = surv.merge(jj[["point", "realization", "interval", "shakes"]],
+                       on=["point", "realization", "interval"], how="inner")
+    result["intervals"] = {}
+    for name, keep in (("after one shake", after["shakes"] <= 1),
+                       ("after a grown shake", after["shakes"] > 1)):
+        sv = after[keep]
+        if len(sv) and sv["event"].sum() > 0:
+            result["intervals"][name] = {"intervals": int(len(sv)),
+                                         "tau": censored_mean(sv["duration"], sv["event"])}
+    i1, i2 = (result["intervals"].get(k) for k in ("after one shake", "after a grown shake"))
+    if i1 and i2:
+        result["z_tau_after_shake"] = z_of(i2["tau"], i1["tau"])
+    a, b = result["groups"].get("no grown shake"), result["groups"].get("grown shake")
+    if a and b:
+        result["z_tau"] = z_of(b["tau"], a["tau"])
+        if a["jams_per_realization_se"] and b["jams_per_realization_se"]:
+            result["z_jams_per_realization"] = (
+                (b["jams_per_realization"] - a["jams_per_realization"]) /
+                math.hypot(a["jams_per_realization_se"], b["jams_per_realization_se"]))
+    return result
+
+
 def arrests(path, out):
     with open_store(path) as s:
-        r = s.realizations
-        surv = s.survival
-        jams = s.jams
-        arches = s.arches
-        pts = s.points
-        by_status = r["status"].value_counts().to_dict()
-        grown = set()
-        for (pt, real), g in jams.groupby(["point", "realization"]):
-            if (g["shakes"] > 1).any():
-                grown.add((pt, real))
-        most = jams.groupby(["point", "realization"])["shakes"].max()
-        result = {"store": path, "realizations": int(len(r)), "by_status": by_status,
-                  "shakes_needed": {int(k): int(v) for k, v in jams["shakes"].value_counts()
-                                    .sort_index().items()},
-                  "groups": {}}
-        # Where the arches rest: jams whose arch has both end disks in the groove between the
-        # edge disk and the next wall disk, by the shakes the jam needed.
-        feet = {}
-        if len(arches) and len(jams) == len(arches):
-            aj = arches.reset_index(drop=True)
-            jj = jams.reset_index(drop=True)
-            for k in range(len(aj)):
-                pt = pts.loc[int(aj.loc[k, "point"])]
-                edge, nxt, rw = edge_disks(pt)
-                r_max = float(pt["particles.d_large_m"]) / 2
-                xs, ys = aj.loc[k, "x"], aj.loc[k, "y"]
-                cls = "needed 1 shake" if int(jj.loc[k, "shakes"]) <= 1 else "needed more"
-                f = feet.setdefault(cls, {"jams": 0, "arches": 0, "both_feet_in_groove": 0})
-                f["jams"] += 1
-                if len(xs) >= 1:
-                    f["arches"] += 1
-                    if foot_in_groove(xs[0], ys[0], edge, nxt, rw, r_max) and \
-                            foot_in_groove(xs[-1], ys[-1], edge, nxt, rw, r_max):
-                        f["both_feet_in_groove"] += 1
-        result["arch_feet"] = feet
-        keys = list(zip(r["point"], r["realization"]))
-        for name, keep in (("all", lambda k: True), ("no grown shake", lambda k: k not in grown),
-                           ("grown shake", lambda k: k in grown)):
-            sel = [k for k in keys if keep(k)]
-            if not sel:
-                continue
-            mask = [(p, q) in set(sel) for p, q in zip(surv["point"], surv["realization"])]
-            sv = surv[mask]
-            tau = censored_mean(sv["duration"], sv["event"])
-            rr = r[[k in set(sel) for k in keys]]
-            n = rr["n_jams"].to_numpy(float)
-            result["groups"][name] = {
-                "realizations": len(sel), "tau": tau,
-                "jams_per_realization": float(n.mean()),
-                "jams_per_realization_se": float(n.std(ddof=1) / math.sqrt(len(n))) if len(n) > 1
-                else None,
-                "arrested": int((rr["status"] == "arrested").sum())}
-        a, b = result["groups"].get("no grown shake"), result["groups"].get("grown shake")
-        if a and b:
-            result["z_tau"] = z_of(b["tau"], a["tau"])
-            if a["jams_per_realization_se"] and b["jams_per_realization_se"]:
-                result["z_jams_per_realization"] = (
-                    (b["jams_per_realization"] - a["jams_per_realization"]) /
-                    math.hypot(a["jams_per_realization_se"], b["jams_per_realization_se"]))
+        result = arrest_summary(s, path)
     print("%s: %d realizations, %s" % (path, result["realizations"], result["by_status"]))
     print("shakes needed per jam (count of jams): %s" % result["shakes_needed"])
     print("%-16s %5s %8s %-34s %s" % ("realizations", "n", "arrested", "tau (s) +- se [95% CI]",
@@ -162,9 +188,11 @@ def arrests(path, out):
     for cls, f in result["arch_feet"].items():
         print("jams that %s: %d, arches found %d, both end disks in the edge groove %d" % (
             cls, f["jams"], f["arches"], f["both_feet_in_groove"]))
-    for key in ("z_tau", "z_jams_per_realization"):
+    for name, g in result["intervals"].items():
+        print("intervals %-20s %5d  tau %s" % (name, g["intervals"], fmt(g["tau"])))
+    for key in ("z_tau", "z_jams_per_realization", "z_tau_after_shake"):
         if result.get(key) is not None:
-            print("%s (grown - no grown) / combined se: %+.2f" % (key, result[key]))
+            print("%s (grown - ordinary) / combined se: %+.2f" % (key, result[key]))
     if out:
         with open(out, "w") as fh:
             json.dump(result, fh, indent=1)

@@ -12,10 +12,12 @@
         s.fields()        # {label: xarray.Dataset} merged field maps (/analysis/fields)
         s.varied          # the scene settings whose value differs between points
 
-A point's settings come from its canonical scene text (/points/scene: every scene parameter,
-SI units, one `name=value` a line), not from its label, so every column has its type (numbers
-float64, integers int64, choices str) and a setting that differs between points is found even
-when the labels do not show it (a store extended with --allow-mixed). Numbers in SI as stored,
+A point's settings come from the typed /points/parameters (every scene parameter of the scene
+schema, in SI, with its unit: docs/store.md), not from its label, so every column has its type
+(numbers float64, integers int64, choices str) and a setting that differs between points is found
+even when the labels do not show it (a store extended with --allow-mixed). Stores written before
+that dataset are read from their canonical scene texts (/points/scene, one `name=value` a line,
+the same names and SI values). Numbers in SI as stored,
 plus the label's units for the outlet and the angle (D_cm, theta_deg), as the sweep file wrote
 them (60, not 59.99999999999999). Seeds are uint64; `seed_str` repeats each as text ('s' and its
 digits), which R's read.csv and spreadsheets keep exact where they would round a number above
@@ -28,6 +30,7 @@ moment (docs/store.md, "Reading a store during a run"): it runs `campaign export
 --snapshot` with the executable named by $HOPPER_CAMPAIGN, else `campaign` on PATH, else the
 source tree's build/src/cli/campaign. The snapshot is removed by close().
 """
+import contextlib
 import fcntl
 import math
 import os
@@ -40,7 +43,7 @@ import h5py
 import numpy as np
 import pandas as pd
 
-__all__ = ["open_store", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
+__all__ = ["open_store", "readable", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
 
 # Scene parameter -> (short symbol for legends, unit shown, factor from the stored SI value).
 # Parameters not listed are shown by their name and stored value.
@@ -224,16 +227,14 @@ class Store:
     def _read_points(self):
         p = self._f["points"]
         labels = p["label"].asstr()[:]
-        scenes = [parse_scene(s) for s in p["scene"].asstr()[:]]
-        names = []
-        for sc in scenes:
-            names += [k for k in sc if k not in names]
+        values, names, stored_kind = self._point_parameters(p)
         # D and theta as the sweep file wrote them, from the scene's SI values (stores written
         # before the plan kept the written value hold the quotient in /points)
-        D = [as_written(sc["hopper.outlet_m"], CM) if "hopper.outlet_m" in sc else float(v)
-             for sc, v in zip(scenes, p["D_cm"][:])]
-        theta = [as_written(sc["hopper.theta_rad"], DEG) if "hopper.theta_rad" in sc
-                 else float(v) for sc, v in zip(scenes, p["theta_deg"][:])]
+        D = [as_written(v, CM) if v is not None else float(w)
+             for v, w in zip(values.get("hopper.outlet_m", [None] * len(labels)), p["D_cm"][:])]
+        theta = [as_written(v, DEG) if v is not None else float(w)
+                 for v, w in zip(values.get("hopper.theta_rad", [None] * len(labels)),
+                                 p["theta_deg"][:])]
         df = pd.DataFrame({
             "label": labels,
             "D_cm": np.array(D, dtype=float),
@@ -244,19 +245,59 @@ class Store:
                 p["physics_hash"].dtype) else p["physics_hash"][:],
         })
         for n in names:
-            values = [sc.get(n) for sc in scenes]
-            kinds = {type(v) for v in values if v is not None}
+            col = values[n]
+            kinds = {type(v) for v in col if v is not None}
+            if stored_kind.get(n) == "f":  # a number column of /points/parameters stays float
+                kinds |= {float}
             if kinds <= {int}:
-                col = pd.array(values, dtype="Int64") if None in values else \
-                    np.array(values, dtype=np.int64)
+                col = pd.array(col, dtype="Int64") if None in col else np.array(col, dtype=np.int64)
             elif kinds <= {int, float}:
-                col = np.array([np.nan if v is None else float(v) for v in values])
+                col = np.array([np.nan if v is None else float(v) for v in col])
             else:
-                col = np.array(["" if v is None else str(v) for v in values], dtype=object)
+                col = np.array(["" if v is None else str(v) for v in col], dtype=object)
             df[n] = col
         df.index.name = "point"
         self._cache["scene_columns"] = names
         return df
+
+    @staticmethod
+    def _point_parameters(p):
+        """{name: [value per point]} and the names in order: from the typed /points/parameters
+        (every scene parameter in SI, docs/store.md) where the store has it; for stores written
+        before it, and for a point it could not type, from the scene text (the legacy path)."""
+        n = p["label"].shape[0]
+        values, names, kinds = {}, [], {}
+        typed = [False] * n
+        if "parameters" in p and isinstance(p["parameters"], h5py.Dataset):
+            rec = p["parameters"][:]
+            typed = [bool(t) for t in rec["typed"]] if "typed" in rec.dtype.names else [True] * n
+            members = rec.dtype.names
+            for name in members:
+                if name == "typed" or (name.startswith("has_") and name[4:] in members):
+                    continue
+                col = rec[name]
+                if col.dtype.kind in "OSU":
+                    vals = [v.decode() if isinstance(v, bytes) else str(v) for v in col]
+                elif col.dtype.kind in "iu":
+                    vals = [int(v) for v in col]
+                else:
+                    vals = [float(v) for v in col]
+                if "has_" + name in members:  # an optional parameter: unset where its flag is off
+                    vals = [v if h else None for v, h in zip(vals, rec["has_" + name])]
+                values[name] = [v if t else None for v, t in zip(vals, typed)]
+                names.append(name)
+                kinds[name] = col.dtype.kind
+        if not all(typed):
+            scenes = p["scene"].asstr()[:]
+            for i in range(n):
+                if typed[i]:
+                    continue
+                for k, v in parse_scene(scenes[i]).items():
+                    if k not in values:
+                        values[k] = [None] * n
+                        names.append(k)
+                    values[k][i] = v
+        return values, names, kinds
 
     def group_of(self, point):
         """Short text of a point's group (its varied settings other than D), e.g. 'theta = 45'."""
@@ -599,13 +640,8 @@ def campaign_executable():
     return os.path.normpath(here) if os.access(here, os.X_OK) else None
 
 
-def open_store(path):
-    """Opens a store for reading (see the module's help). During a run (or after a killed one,
-    before the next run repairs the file) it reads a snapshot of the journal instead of the
-    HDF5 file, which the writer holds and which lags behind the journal."""
-    path = str(path)
-    if not os.path.exists(path + ".journal") or (not writer_active(path) and _in_step(path)):
-        return Store(path)
+def _snapshot(path):
+    """A snapshot of the store's journal in a new temporary directory: (directory, file)."""
     exe = campaign_executable()
     if exe is None:
         raise OSError("'%s' is being written by a `campaign run` (or its last run was "
@@ -618,6 +654,37 @@ def open_store(path):
     if done.returncode != 0:
         tmp.cleanup()
         raise OSError("cannot take a snapshot of '%s': %s" % (path, done.stderr.strip()))
+    return tmp, view
+
+
+def _needs_snapshot(path):
+    return os.path.exists(path + ".journal") and (writer_active(path) or not _in_step(path))
+
+
+@contextlib.contextmanager
+def readable(path):
+    """A path that h5py can open now with the store's content: the store itself, or while a
+    `campaign run` writes it (or after a killed run) a snapshot of its journal, removed when
+    the block ends. For scripts that read the HDF5 layout directly."""
+    path = str(path)
+    if not _needs_snapshot(path):
+        yield path
+        return
+    tmp, view = _snapshot(path)
+    try:
+        yield view
+    finally:
+        tmp.cleanup()
+
+
+def open_store(path):
+    """Opens a store for reading (see the module's help). During a run (or after a killed one,
+    before the next run repairs the file) it reads a snapshot of the journal instead of the
+    HDF5 file, which the writer holds and which lags behind the journal."""
+    path = str(path)
+    if not _needs_snapshot(path):
+        return Store(path)
+    tmp, view = _snapshot(path)
     s = Store(view)
     s.path = path
     s._snapshot_dir = tmp

@@ -121,15 +121,21 @@ def main():
         with open(os.path.join(CALIBRATION, stem + "-calibrated.toml"), "w") as fh:
             fh.write(calibrate(text, stem + "-spec.toml", "campaigns/calibration"))
         print("wrote campaigns/calibration/%s-calibrated.toml" % stem)
-    with open(os.path.join(CALIBRATION, "flow-curve-spec.toml")) as fh:
-        text = fh.read()
-    for candidate, choices in CANDIDATES.items():
-        out = calibrate(text, "flow-curve-spec.toml", "campaigns/calibration", choices,
-                        "-" + candidate)
-        with open(os.path.join(CALIBRATION, "flow-curve-%s.toml" % candidate), "w") as fh:
-            fh.write(out.replace("# CALIBRATED VARIANT (issue 11;",
-                                 "# CANDIDATE '%s' (issue 24;" % candidate, 1))
-        print("wrote campaigns/calibration/flow-curve-%s.toml" % candidate)
+    # Per candidate: its flow curve, its empty times at the eight outlets, and (but for the
+    # calibrated model, whose targets file is written above) its eleven large-outlet targets,
+    # each paired with its -spec file.
+    for stem, skip in (("flow-curve", ()), ("targets", ("calibrated",)), ("empty-times", ())):
+        with open(os.path.join(CALIBRATION, stem + "-spec.toml")) as fh:
+            text = fh.read()
+        for candidate, choices in CANDIDATES.items():
+            if candidate in skip:
+                continue
+            out = calibrate(text, stem + "-spec.toml", "campaigns/calibration", choices,
+                            "-" + candidate)
+            with open(os.path.join(CALIBRATION, "%s-%s.toml" % (stem, candidate)), "w") as fh:
+                fh.write(out.replace("# CALIBRATED VARIANT (issue 11;",
+                                     "# CANDIDATE '%s' (issue 24;" % candidate, 1))
+            print("wrote campaigns/calibration/%s-%s.toml" % (stem, candidate))
 
 
 if __name__ == "__main__":

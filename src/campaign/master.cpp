@@ -96,6 +96,7 @@ void Dispatcher::begin_drain(StopLevel level) {
 }
 
 void Dispatcher::stop_running() {
+    report_.stopped_running = true;
     if (!stop_announced_)
         log_ << "campaign: stopping the " << busy_.size() << " running realization(s)" << std::endl;
     send_stop_now();

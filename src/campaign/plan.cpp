@@ -5,10 +5,13 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string_view>
 #include <variant>
 
+#include "hopper/campaign/stored_scenes.hpp"
 #include "hopper/config/sanity.hpp"
+#include "hopper/config/scene_schema.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/engine/scene.hpp"
 #include "hopper/store/codec.hpp"
@@ -16,33 +19,6 @@
 namespace hopper::campaign {
 
 namespace {
-
-std::string number(double v) {
-    char buf[64];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
-}
-
-class Lines {
-  public:
-    void add(const char* name, double v) { text_ += std::string(name) + "=" + number(v) + "\n"; }
-    void add(const char* name, int v) {
-        text_ += std::string(name) + "=" + std::to_string(v) + "\n";
-    }
-    void add(const char* name, const std::string& v) {
-        text_ += std::string(name) + "=" + v + "\n";
-    }
-    void add(const char* name, const std::optional<double>& v) {
-        if (v)
-            add(name, *v);
-        else
-            add(name, std::string("unset"));
-    }
-    std::string take() { return std::move(text_); }
-
-  private:
-    std::string text_;
-};
 
 // "name=value" texts of typed settings, by name.
 std::map<std::string, std::string> by_name(const std::vector<core::Setting>& settings) {
@@ -55,118 +31,59 @@ std::map<std::string, std::string> by_name(const std::vector<core::Setting>& set
 // The parameters in which two points of different physics differ, one "\n    name = value
 // (store: value)" line each.
 std::string physics_diff(const store::PointPlan& mine, const store::PointPlan& stored) {
-    if (mine.parameters.empty() || stored.parameters.empty())
-        return "\n    (the physics text differs; the store's sweep file cannot be read back to "
-               "name the parameter)";
-    const auto a = by_name(mine.parameters), b = by_name(stored.parameters);
+    using Values = std::map<std::string, std::string>;
+    // "\n    name = value (store: value)" for each name whose value differs, unless `same`.
+    const auto compare = [](const Values& a, const Values& b, auto same) {
+        std::string out;
+        for (const auto& [k, v] : a) {
+            const auto it = b.find(k);
+            const std::string old = it == b.end() ? "absent" : it->second;
+            if (old != v && !same(k, v, it == b.end()))
+                out += "\n    " + k + " = " + v + " (store: " + old + ")";
+        }
+        for (const auto& [k, v] : b)
+            if (!a.count(k)) out += "\n    " + k + " absent (store: " + v + ")";
+        return out;
+    };
     std::string diff;
-    for (const auto& [k, v] : a) {
-        const auto it = b.find(k);
-        const std::string old = it == b.end() ? "absent" : it->second;
-        if (old != v) diff += "\n    " + k + " = " + v + " (store: " + old + ")";
-    }
-    for (const auto& [k, v] : b)
-        if (!a.count(k)) diff += "\n    " + k + " absent (store: " + v + ")";
+    if (!mine.parameters.empty() && !stored.parameters.empty())
+        // A parameter newer than the store is its physics at the default (issue 28).
+        diff = compare(by_name(mine.parameters), by_name(stored.parameters),
+                       [](const std::string& k, const std::string& v, bool absent) {
+                           const auto def = absent ? config::default_parameter(k) : std::nullopt;
+                           return def && config::value_text(*def) == v;
+                       });
+    if (!diff.empty()) return diff;
+    // No sweep parameter differs: name the physics text's lines that do.
+    const auto lines = [](const std::string& text) {
+        Values m;
+        std::size_t at = 0;
+        while (at < text.size()) {
+            const std::size_t end = std::min(text.find('\n', at), text.size());
+            const std::string line = text.substr(at, end - at);
+            const std::size_t eq = line.find('=');
+            if (eq != std::string::npos) m[line.substr(0, eq)] = line.substr(eq + 1);
+            at = end + 1;
+        }
+        return m;
+    };
+    const auto a = lines(mine.scene), b = lines(stored.scene);
+    diff = compare(a, b, [](const std::string&, const std::string&, bool) { return false; });
+    if (a.count("protocol.reinsertion") && !b.count("protocol.reinsertion"))
+        diff +=
+            "\n    (the store was written before the fix of the steady state's springs, "
+            "CHANGELOG: there every re-insertion reset every tangential spring; finish it "
+            "with the version that wrote it, which `campaign status` names, or start a new "
+            "store)";
     return diff.empty() ? "\n    (the physics text differs in a value no sweep key sets)" : diff;
 }
 
 }  // namespace
 
 std::string scene_text(const engine::SceneParams& p) {
-    // Keep in step with engine::SceneParams (every field that changes the physics). The text is
-    // a fingerprint only: it is hashed and compared, never parsed back into values (the typed
-    // `parameters` of the plan are for that).
-    Lines l;
-    l.add("hopper.width_m", p.hopper.width);
-    l.add("hopper.outlet_m", p.hopper.outlet);
-    l.add("hopper.theta_rad", p.hopper.theta);
-    l.add("hopper.wall_diameter_m", p.hopper.wall_diameter);
-    l.add("hopper.wall_spacing", p.hopper.wall_spacing);
-    l.add("particles.count", p.particles.count);
-    l.add("particles.small_fraction", p.particles.small_fraction);
-    l.add("particles.d_small_m", p.particles.d_small);
-    l.add("particles.d_large_m", p.particles.d_large);
-    l.add("particles.thickness_m", p.particles.thickness);
-    l.add("particles.density_kg_m3", p.particles.density);
-    l.add("material.e_n", p.material.system.e_n);
-    l.add("material.mu", p.material.system.mu);
-    l.add("walls.e_n", p.material.wall.e_n);
-    l.add("walls.mu", p.material.wall.mu);
-    l.add("material.kt_over_kn", p.material.kt_over_kn);
-    l.add("material.youngs_modulus_pa", p.material.youngs_modulus);
-    l.add("material.poisson_ratio", p.material.poisson_ratio);
-    l.add("material.collision_time_s", p.material.collision_time);
-    l.add("integrator.scheme", engine::to_string(p.integrator.scheme));
-    l.add("integrator.steps_per_collision", p.integrator.steps_per_collision);
-    l.add("integrator.skin", p.integrator.skin);
-    const auto& q = p.protocol;
-    l.add("protocol.fill_gap", q.fill_gap);
-    l.add("protocol.fill_speed_m_s", q.fill_speed);
-    l.add("protocol.settle_ke", q.settle_ke);
-    l.add("protocol.settle_hold_s", q.settle_hold);
-    l.add("protocol.settle_max_time_s", q.settle_max_time);
-    l.add("protocol.jam_region_height", q.jam_region_height);
-    l.add("protocol.t_check_s", q.t_check);
-    l.add("protocol.detector_interval_s", q.detector_interval);
-    l.add("protocol.shake_amplitude", q.shake_amplitude);
-    l.add("protocol.shake_period_s", q.shake_period);
-    l.add("protocol.shake_direction_rad", q.shake_direction);
-    l.add("protocol.max_shakes", q.max_shakes);
-    l.add("protocol.max_time_s", q.max_time);
-    l.add("protocol.exit_depth", q.exit_depth);
-    l.add("protocol.empty_threshold", q.empty_threshold);
-    l.add("protocol.sample_interval_s", q.sample_interval);
-    l.add("protocol.max_overlap", q.max_overlap);
-    l.add("gravity_m_s2", p.gravity);
-    // Modelling choices added later (issue 11): listed only when they differ from the default,
-    // so that a point's text (and its physics check) is unchanged for stores written before.
-    const engine::SceneParams d;
-    const auto& h = p.hopper;
-    const auto& m = p.material;
-    if (h.outlet_measure != d.hopper.outlet_measure)
-        l.add("hopper.outlet_measure", engine::to_string(h.outlet_measure));
-    if (h.edge_diameter) l.add("hopper.edge_diameter_m", *h.edge_diameter);
-    if (h.edge_offset != d.hopper.edge_offset) l.add("hopper.edge_offset", h.edge_offset);
-    if (m.gamma_t_over_gamma_n != d.material.gamma_t_over_gamma_n)
-        l.add("material.gamma_t_over_gamma_n", m.gamma_t_over_gamma_n);
-    if (m.slip_rule != d.material.slip_rule)
-        l.add("material.slip_rule", engine::to_string(m.slip_rule));
-    if (m.lever_arm != d.material.lever_arm)
-        l.add("material.lever_arm", engine::to_string(m.lever_arm));
-    // Issue 28: the normal law, listed only when it is not the linear one.
-    if (m.normal_law != d.material.normal_law)
-        l.add("material.normal_law", engine::to_string(m.normal_law));
-    if (m.mu_r != d.material.mu_r) l.add("material.mu_r", m.mu_r);
-    if (m.normal_damping != d.material.normal_damping)
-        l.add("material.normal_damping", engine::to_string(m.normal_damping));
-    if (q.fill_base != d.protocol.fill_base) l.add("protocol.fill_base", q.fill_base);
-    // Issue 12: listed only when on (stores written before it have it off).
-    if (p.integrator.contact_corrections)
-        l.add("integrator.contact_corrections", std::string("true"));
-    // Steady state (issue 13): listed only when not the published protocol.
-    if (q.mode != d.protocol.mode) l.add("protocol.mode", engine::to_string(q.mode));
-    if (q.jams_per_realization != d.protocol.jams_per_realization)
-        l.add("protocol.jams_per_realization", q.jams_per_realization);
-    // The unjamming protocol (issue 26): listed only when it is not the shake.
-    if (q.unjam != d.protocol.unjam) l.add("protocol.unjam", engine::to_string(q.unjam));
-    // Growing shakes (issue 23): listed only when the shakes grow.
-    if (q.shake_growth != d.protocol.shake_growth) {
-        l.add("protocol.shake_growth", q.shake_growth);
-        l.add("protocol.shake_amplitude_max", q.shake_amplitude_max);
-    }
-    // Fields: listed only when on, so stores written before fields existed stay compatible.
-    const auto& f = p.fields;
-    if (f.enabled) {
-        l.add("fields.window_s", f.window);
-        l.add("fields.cell_dlarge", f.cell);
-        l.add("fields.sample_interval_s", f.sample_interval);
-        l.add("fields.start_s", f.start);
-        l.add("fields.end_s", f.end);
-        l.add("fields.kernel", engine::to_string(f.kernel));
-        if (f.kernel == engine::FieldKernel::gaussian)
-            l.add("fields.kernel_width_dlarge", f.kernel_width);
-    }
-    return l.take();
+    // Generated from the scene schema (config/scene_schema.hpp), byte for byte the text of the
+    // hand-written list it replaced (tests/campaign/test_fingerprint_rows.cpp).
+    return config::scene_fingerprint(p);
 }
 
 namespace {
@@ -181,6 +98,11 @@ double written_number(const std::vector<core::Setting>& parameters, std::string_
 }
 
 }  // namespace
+
+int first_allotment(const config::CampaignSpec& spec, const config::Point& point) {
+    if (!spec.target) return point.realizations;
+    return std::clamp(point.first_round, std::min(1, point.realizations), point.realizations);
+}
 
 store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
     store::CampaignPlan plan;
@@ -197,11 +119,31 @@ store::CampaignPlan make_plan(const config::CampaignSpec& spec) {
         p.particles = pt.scene.particles.count;
         p.settings = pt.settings;
         p.parameters = pt.parameters;
-        for (int r = 0; r < pt.realizations; ++r)
+        // With a target, the plan lists the first round's seeds and the limit; each later round
+        // adds its own (store::AllotmentRecord), so the plan costs what is planned (issue 29).
+        p.limit = pt.realizations;
+        const int listed = first_allotment(spec, pt);
+        p.seeds.reserve(static_cast<std::size_t>(listed));
+        for (int r = 0; r < listed; ++r)
             p.seeds.push_back(config::derive_seed(spec.seed, pt.settings, r));
         plan.points.push_back(std::move(p));
     }
     return plan;
+}
+
+store::CampaignPlan plan_additions(const store::CampaignPlan& stored, store::CampaignPlan sweep) {
+    std::map<std::string_view, const store::PointPlan*> by_label;
+    for (const auto& s : stored.points)
+        by_label.emplace(s.label, &s);
+    std::vector<store::PointPlan> added;
+    for (auto& p : sweep.points) {
+        const auto it = by_label.find(p.label);
+        if (it == by_label.end() || p.realizations() > it->second->realizations() ||
+            p.max_realizations() > it->second->max_realizations())
+            added.push_back(std::move(p));
+    }
+    sweep.points = std::move(added);
+    return sweep;
 }
 
 void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSummary>& runs) {
@@ -209,24 +151,12 @@ void restore_settings(store::CampaignPlan& plan, const std::vector<store::RunSum
         return p.settings.empty() || p.parameters.empty();
     };
     if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
-    for (auto run = runs.rbegin(); run != runs.rend(); ++run) {
-        std::vector<config::Point> points;
-        try {
-            points = config::parse_sweep(run->info.sweep_text, "<recorded sweep>").campaign.points;
-        } catch (const core::ConfigError&) {
-            continue;  // written for another version of the keys: no help
+    const auto recorded = recorded_points(plan, runs, missing);  // the legacy path
+    for (std::size_t i = 0; i < plan.points.size(); ++i)
+        if (recorded[i]) {
+            plan.points[i].settings = recorded[i]->point.settings;
+            plan.points[i].parameters = recorded[i]->point.parameters;
         }
-        for (auto& p : plan.points) {
-            if (!missing(p)) continue;
-            for (const auto& q : points)
-                if (q.label == p.label && scene_text(q.scene) == p.scene) {
-                    p.settings = q.settings;
-                    p.parameters = q.parameters;
-                    break;
-                }
-        }
-        if (std::none_of(plan.points.begin(), plan.points.end(), missing)) return;
-    }
 }
 
 store::CampaignPlan read_plan(const std::filesystem::path& store) {
@@ -249,12 +179,17 @@ std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
     // Differences per point, grouped so that one changed base value reads as one line.
     std::map<std::string, std::vector<std::string>> by_diff;  // diff text -> points
     int changed = 0;
-    int new_points = 0, more_realizations = 0;
+    int new_points = 0;
+    long long more_realizations = 0;
+    std::map<std::string_view, const store::PointPlan*> by_label;  // not find(): 10^5 points
+    for (const auto& s : stored.points)
+        by_label.emplace(s.label, &s);
     for (const auto& p : sweep.points) {
-        const store::PointPlan* s = stored.find(p.label);
+        const auto found = by_label.find(p.label);
+        const store::PointPlan* s = found == by_label.end() ? nullptr : found->second;
         if (!s) {
             ++new_points;
-            more_realizations += p.realizations();
+            more_realizations += p.max_realizations();
             continue;
         }
         if (p.scene != s->scene) {
@@ -269,8 +204,9 @@ std::vector<std::string> check_compatible(const store::CampaignPlan& stored,
                     "point '" + p.label + "' realization " + std::to_string(r) + " has seed " +
                     std::to_string(p.seeds[r]) + " here but " + std::to_string(s->seeds[r]) +
                     " in the store (the seed derivation changed between versions?)" + advice);
-        if (p.seeds.size() > s->seeds.size())
-            more_realizations += static_cast<int>(p.seeds.size() - s->seeds.size());
+        // Counted to the limits: a target campaign lists only the seeds of its rounds so far.
+        if (p.max_realizations() > s->max_realizations())
+            more_realizations += p.max_realizations() - s->max_realizations();
     }
     if (changed > 0) {
         std::string msg = "the sweep file's physics differs from the store's for " +

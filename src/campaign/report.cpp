@@ -79,23 +79,29 @@ void write_summary(std::ostream& out, const store::StoreStatus& status,
     std::size_t width = 5;
     for (const auto& l : labels)
         width = std::max(width, l.size());
+    // Stored / planned, and "of" the limit of a target campaign's point ("25/26 of 1000000").
+    const auto stored_text = [](const store::PointStatus& p) {
+        return std::to_string(p.done + p.failed - p.errors) + "/" + std::to_string(p.planned) +
+               (p.limit > p.planned ? " of " + std::to_string(p.limit) : std::string());
+    };
+    int column = 13;
+    for (const auto& p : status.points)
+        column = std::max(column, static_cast<int>(stored_text(p).size()));
     char buf[512];
-    std::snprintf(buf, sizeof buf, "%-*s  %13s  %6s  %6s  %14s  %14s\n", static_cast<int>(width),
-                  "point", "realizations", "failed", "jams", "tau (s)", "mean empty (s)");
+    std::snprintf(buf, sizeof buf, "%-*s  %*s  %6s  %6s  %14s  %14s\n", static_cast<int>(width),
+                  "point", column, "realizations", "failed", "jams", "tau (s)", "mean empty (s)");
     out << buf;
     for (const auto& l : labels) {
         const auto it = by_label.find(l);
         if (it == by_label.end()) continue;
         const store::PointStatus& p = *it->second;
-        const std::string stored =
-            std::to_string(p.done + p.failed - p.errors) + "/" + std::to_string(p.planned);
+        const std::string stored = stored_text(p);
         char surv[32] = "-", empty[32] = "-";
         if (p.uncensored > 0)
             std::snprintf(surv, sizeof surv, "%.4g", p.survival_sum / p.uncensored);
         if (p.emptied > 0) std::snprintf(empty, sizeof empty, "%.4g", p.empty_sum / p.emptied);
-        std::snprintf(buf, sizeof buf, "%-*s  %13s  %6d  %6d  %14s  %14s\n",
-                      static_cast<int>(width), l.c_str(), stored.c_str(), p.failed, p.jams, surv,
-                      empty);
+        std::snprintf(buf, sizeof buf, "%-*s  %*s  %6d  %6d  %14s  %14s\n", static_cast<int>(width),
+                      l.c_str(), column, stored.c_str(), p.failed, p.jams, surv, empty);
         out << buf;
     }
     out << "(tau: mean survival time, the censored maximum-likelihood mean = flow time / jams)\n";

@@ -8,6 +8,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <thread>
 
 #include "hopper/campaign/adaptive.hpp"
@@ -17,6 +18,7 @@
 #include "hopper/campaign/mixing.hpp"
 #include "hopper/campaign/mpi.hpp"
 #include "hopper/campaign/plan.hpp"
+#include "hopper/campaign/point_columns.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/running.hpp"
 #include "hopper/campaign/signals.hpp"
@@ -79,7 +81,7 @@ class QuitWorkers {
 
 struct Campaign {
     config::SweepFile sweep;
-    std::vector<config::Task> tasks;
+    config::TaskList tasks;  // made task by task: a target campaign plans max_realizations
 };
 
 Campaign load(const RunOptions& opt) {
@@ -89,16 +91,14 @@ Campaign load(const RunOptions& opt) {
         throw core::ConfigError(opt.sweep.string() +
                                 ": no [campaign] section: `campaign run` needs one (name, seed, "
                                 "realizations; see campaigns/README.md)");
-    c.tasks = config::expand_tasks(c.sweep.campaign);
+    c.tasks = config::TaskList(c.sweep.campaign);
     return c;
 }
 
 ResumableTaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
     return [&opt, &c](int task_id, std::span<const std::uint8_t> state,
                       const engine::RunHooks& hooks) {
-        if (task_id < 0 || task_id >= static_cast<int>(c.tasks.size()))
-            throw std::out_of_range("task id " + std::to_string(task_id) + " is not in the list");
-        const config::Task& t = c.tasks[static_cast<std::size_t>(task_id)];
+        const config::Task t = c.tasks.at(task_id);  // std::out_of_range for an unknown id
         const engine::SceneParams& scene =
             c.sweep.campaign.points[static_cast<std::size_t>(t.point_index)].scene;
         if (opt.runner) return opt.runner(t, scene, hooks);
@@ -116,15 +116,40 @@ ResumableTaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
     };
 }
 
+// Each point's allotment (realizations planned so far), by label: the store's plan.
+std::map<std::string_view, int> allotments(const store::Store& st) {
+    std::map<std::string_view, int> out;
+    for (const auto& p : st.plan().points)
+        out.emplace(p.label, p.realizations());
+    return out;
+}
+
+// Records what a round allots beyond the store's plan: the new seeds of every point whose
+// allotment grows (replay_rounds decides; the record only lists).
+void allot_round(store::Store& st, const Campaign& c, const RoundState& rs) {
+    const auto& spec = c.sweep.campaign;
+    const auto have = allotments(st);
+    store::AllotmentRecord rec;
+    for (std::size_t p = 0; p < rs.points.size(); ++p) {
+        const auto it = have.find(spec.points[p].label);
+        const int from = it == have.end() ? 0 : it->second;
+        const int to = std::min(rs.points[p].allotted, c.tasks.realizations(static_cast<int>(p)));
+        if (to <= from) continue;
+        store::PointAllotment a{spec.points[p].label, from, {}};
+        for (int r = from; r < to; ++r)
+            a.seeds.push_back(c.tasks.at(static_cast<int>(p), r).seed);
+        rec.points.push_back(std::move(a));
+    }
+    st.allot(rec);
+}
+
 // A campaign with a target (adaptive.hpp): rounds until no point needs more. Each round's
 // decisions are replayed from the journal, so an interrupted run resumes the same sequence.
-MasterReport run_rounds(Master& master, const Campaign& c, const fs::path& store_path,
+MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
                         const std::vector<double>& cost, Totals totals, std::ostream& err) {
     const auto& spec = c.sweep.campaign;
     const auto quantity = spec.target->quantity;
-    std::map<std::pair<int, int>, const config::Task*> task_of;
-    for (const auto& t : c.tasks)
-        task_of[{t.point_index, t.realization}] = &t;
+    const fs::path& store_path = st.path();
     MasterReport all;
     for (;;) {
         std::map<std::string, PointResults> stored;
@@ -137,18 +162,25 @@ MasterReport run_rounds(Master& master, const Campaign& c, const fs::path& store
                 << describe_rounds(rs, quantity) << std::flush;
             break;
         }
+        // The round's allotments into the plan (issue 29: the plan grows round by round; the
+        // store records only what is new), then its missing realizations as tasks.
+        allot_round(st, c, rs);
         std::vector<TaskRef> todo;
         for (const auto& [p, i] : rs.missing) {
-            const config::Task* t = task_of.at({p, i});
-            todo.push_back(TaskRef{t->task_id, spec.points[std::size_t(p)].label, i, t->seed,
+            const config::Task t = c.tasks.at(p, i);
+            todo.push_back(TaskRef{t.task_id, spec.points[std::size_t(p)].label, i, t.seed,
                                    expected_seconds(cost[std::size_t(p)])});
         }
+        // Progress counts within the allotments so far (not max_realizations per point).
+        totals.finished = 0;
+        for (const auto& [label, results] : stored)
+            totals.finished += static_cast<int>(results.size());
+        totals.total = totals.finished + static_cast<int>(todo.size());
         err << "campaign: round " << rs.round + 1 << " (target " << config::to_string(quantity)
             << ", relative 95 % half-width <= " << spec.target->rel_half_width
             << "): " << todo.size() << " realization(s) to run\n"
             << describe_rounds(rs, quantity) << std::flush;
         const MasterReport r = master.run(todo, totals);
-        totals.finished += r.stored;
         all.stored += r.stored;
         all.failed += r.failed;
         all.errors += r.errors;
@@ -199,15 +231,27 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         throw core::ConfigError("the deadline has already passed (" +
                                 format_duration(store::unix_now() - *deadline) +
                                 " ago): no realization is started; give a later --deadline");
-    store::Store st(store_path, opt.store_options);
+    store::StoreOptions store_options = opt.store_options;
+    if (!store_options.point_parameters) store_options.point_parameters = point_parameter_columns;
+    store::Store st(store_path, std::move(store_options));
     for (const auto& n : st.notes())
         err << "campaign: note: " << n << '\n';
 
-    const store::CampaignPlan plan = make_plan(spec);
+    store::CampaignPlan plan = make_plan(spec);
+    std::vector<std::uint64_t> physics;  // per point of the sweep
+    for (const auto& p : plan.points)
+        physics.push_back(p.physics_hash());
     const bool resumed = !st.is_new();
     if (resumed) {
-        store::CampaignPlan stored = st.plan();  // typed settings restored for old points
-        restore_settings(stored, st.status().runs);
+        // Typed settings restored for old points (a copy only where some lack them: the plan of
+        // 10^5 points is large).
+        std::optional<store::CampaignPlan> restored;
+        if (std::any_of(st.plan().points.begin(), st.plan().points.end(),
+                        [](const auto& p) { return p.settings.empty() || p.parameters.empty(); })) {
+            restored = st.plan();
+            restore_settings(*restored, st.status().runs);
+        }
+        const store::CampaignPlan& stored = restored ? *restored : st.plan();
         for (const auto& n : check_compatible(stored, plan))
             err << "campaign: note: " << n << '\n';
         if (const auto mixed = mixed_settings(stored, plan); !mixed.empty()) {
@@ -229,53 +273,87 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
                 << " (results are compared per realization only within one version)\n";
     }
 
-    store::RunStartRecord start;
-    start.run.start_time = store::utc_now();
-    start.run.code_version = opt.code_version;
-    start.run.compiler = compiler_id();
-    start.run.command = opt.command_line;
-    start.run.sweep_path = c.sweep.path.string();
-    start.run.sweep_text = c.sweep.text;
-    start.run.mpi_size = mpi_size;
-    start.run.workers = channel.workers();
-    start.run.hosts = std::move(hosts);
-    start.run.pid = static_cast<std::int64_t>(getpid());
-    start.plan = plan;
-    st.begin_run(start);
+    {
+        store::RunStartRecord start;
+        start.run.start_time = store::utc_now();
+        start.run.code_version = opt.code_version;
+        start.run.compiler = compiler_id();
+        start.run.command = opt.command_line;
+        start.run.sweep_path = c.sweep.path.string();
+        start.run.sweep_text = c.sweep.text;
+        start.run.mpi_size = mpi_size;
+        start.run.workers = channel.workers();
+        start.run.hosts = std::move(hosts);
+        start.run.pid = static_cast<std::int64_t>(getpid());
+        // What the sweep adds to the store's plan (all of it for a new store): a resume records
+        // its new points and realizations, not the whole plan again (issue 29).
+        start.plan = resumed ? plan_additions(st.plan(), std::move(plan)) : std::move(plan);
+        st.begin_run(std::move(start));
+    }
 
     // What to run: the sweep's tasks with no result yet (pending, or left in error), the most
     // expensive first (ties in task order).
     std::vector<double> cost(spec.points.size());
     for (std::size_t p = 0; p < spec.points.size(); ++p)
         cost[p] = expected_cost(spec.points[p].scene);
-    std::vector<TaskRef> todo;
-    Totals totals;
-    totals.total = static_cast<int>(c.tasks.size());
-    for (const auto& t : c.tasks) {
-        const auto& label = spec.points[static_cast<std::size_t>(t.point_index)].label;
-        const store::TaskEntry* e = st.task(label, t.realization);
-        const store::TaskState s = e ? e->state : store::TaskState::pending;
-        if (s == store::TaskState::done || s == store::TaskState::failed) {
-            ++totals.finished;
-            if (s == store::TaskState::failed) ++totals.failed;
-            continue;
+    // The realizations planned so far per point: all of them, or with a target those the rounds
+    // allotted (the store's plan; run_rounds extends it), never max_realizations (issue 29).
+    std::vector<int> planned(spec.points.size());
+    {
+        const auto have = allotments(st);
+        for (std::size_t p = 0; p < spec.points.size(); ++p) {
+            planned[p] = c.tasks.realizations(static_cast<int>(p));
+            if (spec.target) {
+                const auto it = have.find(spec.points[p].label);
+                planned[p] = std::min(planned[p], it == have.end() ? 0 : it->second);
+            }
         }
-        const store::PointPlan* pp = plan.find(label);
-        todo.push_back(TaskRef{t.task_id, label, t.realization, t.seed,
-                               expected_seconds(cost[static_cast<std::size_t>(t.point_index)]),
-                               pp ? pp->physics_hash() : 0});
     }
-    std::stable_sort(todo.begin(), todo.end(), [&](const TaskRef& a, const TaskRef& b) {
-        return cost[static_cast<std::size_t>(
-                   c.tasks[static_cast<std::size_t>(a.task_id)].point_index)] >
-               cost[static_cast<std::size_t>(
-                   c.tasks[static_cast<std::size_t>(b.task_id)].point_index)];
-    });
+    std::vector<TaskRef> todo;
+    std::vector<std::size_t> point_of;  // todo's points, for the order
+    Totals totals;
+    for (std::size_t p = 0; p < spec.points.size(); ++p) {
+        const auto& label = spec.points[p].label;
+        totals.total += planned[p];
+        for (int r = 0; r < planned[p]; ++r) {
+            const store::TaskEntry* e = st.task(label, r);
+            const store::TaskState s = e ? e->state : store::TaskState::pending;
+            if (s == store::TaskState::done || s == store::TaskState::failed) {
+                ++totals.finished;
+                if (s == store::TaskState::failed) ++totals.failed;
+                continue;
+            }
+            if (spec.target) continue;  // the rounds decide what runs (run_rounds)
+            const config::Task t = c.tasks.at(static_cast<int>(p), r);
+            todo.push_back(
+                TaskRef{t.task_id, label, r, t.seed, expected_seconds(cost[p]), physics[p]});
+            point_of.push_back(p);
+        }
+    }
+    {
+        std::vector<std::size_t> order(todo.size());
+        std::iota(order.begin(), order.end(), std::size_t{0});
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+            return cost[point_of[a]] > cost[point_of[b]];
+        });
+        std::vector<TaskRef> sorted;
+        sorted.reserve(todo.size());
+        for (const std::size_t i : order)
+            sorted.push_back(std::move(todo[i]));
+        todo = std::move(sorted);
+    }
     err << "campaign: store " << store_path.string() << (resumed ? " (resumed)" : " (new)") << ": "
-        << totals.total << " realizations in the sweep, " << totals.finished << " stored"
-        << (totals.failed ? " (" + std::to_string(totals.failed) + " failed)" : std::string())
-        << ", " << todo.size() << " to run on " << channel.workers() << " worker"
-        << (channel.workers() == 1 ? "" : "s") << std::endl;
+        << totals.total
+        << (spec.target ? " realizations allotted so far (rounds, up to max_realizations = " +
+                              std::to_string(spec.target->max_realizations) + " per point)"
+                        : std::string(" realizations in the sweep"))
+        << ", " << totals.finished << " stored"
+        << (totals.failed ? " (" + std::to_string(totals.failed) + " failed)" : std::string());
+    if (spec.target)
+        err << "; the rounds decide what runs on ";
+    else
+        err << ", " << todo.size() << " to run on ";
+    err << channel.workers() << " worker" << (channel.workers() == 1 ? "" : "s") << std::endl;
 
     MasterOptions mo = opt.master;
     std::optional<CheckpointFiles> checkpoints;
@@ -283,12 +361,15 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         checkpoints.emplace(store_path, opt.code_version);
         mo.checkpoints = &*checkpoints;
         // A checkpoint left by a crash between storing a result and removing its file.
-        for (const auto& t : c.tasks) {
-            const auto& label = spec.points[static_cast<std::size_t>(t.point_index)].label;
-            const store::TaskEntry* e = st.task(label, t.realization);
-            if (e && (e->state == store::TaskState::done || e->state == store::TaskState::failed))
-                checkpoints->remove(CheckpointKey{label, t.realization, t.seed, 0});
-        }
+        for (std::size_t p = 0; p < spec.points.size(); ++p)
+            for (int r = 0; r < planned[p]; ++r) {
+                const auto& label = spec.points[p].label;
+                const store::TaskEntry* e = st.task(label, r);
+                if (e &&
+                    (e->state == store::TaskState::done || e->state == store::TaskState::failed))
+                    checkpoints->remove(
+                        CheckpointKey{label, r, c.tasks.at(static_cast<int>(p), r).seed, 0});
+            }
         checkpoints->remove_dir_if_empty();
     }
     mo.running_file = running_path(store_path);
@@ -296,12 +377,14 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     // The cost model's correction from what this campaign measured so far (every run).
     if (resumed) {
         const store::StoreStatus before = st.status();
+        std::map<std::string_view, std::size_t> index;  // not a scan per point: 10^5 points
+        for (std::size_t p = 0; p < spec.points.size(); ++p)
+            index.emplace(spec.points[p].label, p);
         for (const auto& ps : before.points)
-            for (std::size_t p = 0; p < spec.points.size(); ++p)
-                if (spec.points[p].label == ps.label && ps.timed > 0) {
-                    mo.measured_seconds += ps.task_seconds;
-                    mo.measured_expected += ps.timed * expected_seconds(cost[p]);
-                }
+            if (const auto it = index.find(ps.label); it != index.end() && ps.timed > 0) {
+                mo.measured_seconds += ps.task_seconds;
+                mo.measured_expected += ps.timed * expected_seconds(cost[it->second]);
+            }
     }
     if (mo.deadline)
         err << "campaign: deadline " << format_duration(*mo.deadline - store::unix_now())
@@ -314,12 +397,34 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
 
     state->dispatching = true;
     Master master(channel, st, signals, mo, err);
-    const MasterReport rep = spec.target ? run_rounds(master, c, store_path, cost, totals, err)
-                                         : master.run(todo, totals);
+    const MasterReport rep =
+        spec.target ? run_rounds(master, c, st, cost, totals, err) : master.run(todo, totals);
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 
-    const std::string reason = rep.stopped              ? "interrupted by " + rep.stop_reason
+    int left = 0, failed = 0;
+    {
+        const auto have = allotments(st);  // the rounds may have grown them
+        for (std::size_t p = 0; p < spec.points.size(); ++p) {
+            const auto it = have.find(spec.points[p].label);
+            const int n = std::min(c.tasks.realizations(static_cast<int>(p)),
+                                   it == have.end() ? 0 : it->second);
+            for (int r = 0; r < n; ++r) {
+                const store::TaskEntry* e = st.task(spec.points[p].label, r);
+                const store::TaskState s = e ? e->state : store::TaskState::pending;
+                if (s == store::TaskState::pending) ++left;
+                if (s == store::TaskState::failed || s == store::TaskState::error) ++failed;
+            }
+        }
+    }
+    // A drain that the last realization outlived stopped nothing: complete. A stop sent to running
+    // realizations stays a stop, and so does any with a target (its rounds decide what is due).
+    const bool stopped =
+        rep.stopped && !(left == 0 && rep.interrupted == 0 && !spec.target && !rep.stopped_running);
+    if (rep.stopped && !stopped)
+        err << "campaign: " << rep.stop_reason << " came after the last realization was handed "
+            << "out, and it finished: the run is complete" << std::endl;
+    const std::string reason = stopped                  ? "interrupted by " + rep.stop_reason
                                : !rep.fail_fast.empty() ? "stopped early: " + rep.fail_fast
                                                         : std::string("complete");
     st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
@@ -333,14 +438,6 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     write_summary(out, status, labels);
     out.flush();
 
-    int left = 0, failed = 0;
-    for (const auto& t : c.tasks) {
-        const store::TaskEntry* e =
-            st.task(spec.points[static_cast<std::size_t>(t.point_index)].label, t.realization);
-        const store::TaskState s = e ? e->state : store::TaskState::pending;
-        if (s == store::TaskState::pending) ++left;
-        if (s == store::TaskState::failed || s == store::TaskState::error) ++failed;
-    }
     char share[64];
     std::snprintf(share, sizeof share, "%.2f%%",
                   rep.wall_seconds > 0 ? 100.0 * rep.cpu_seconds / rep.wall_seconds : 0.0);
@@ -361,7 +458,7 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             << format_duration(rep.saved_worker_seconds) << " kept in checkpoints, "
             << format_duration(rep.lost_worker_seconds) << " thrown away; " << rep.resumed
             << " realization(s) continued from a checkpoint" << std::endl;
-    if (rep.stopped) {
+    if (stopped) {
         err << "campaign: stopped by " << rep.stop_reason << "; " << left + failed
             << " realization(s) not stored yet (" << rep.interrupted
             << " interrupted). Resume with:\n  " << resume << std::endl;
@@ -411,59 +508,87 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
     // Measured worker seconds per particle-step over the stored realizations of these points.
     double measured_s = 0.0, measured_cost = 0.0;
     std::vector<double> cost(spec.points.size()), prior(spec.points.size());
+    std::map<std::string_view, const store::PointStatus*> status_of;  // not a scan per point
+    for (const auto& ps : status.points)
+        status_of.emplace(ps.label, &ps);
+    const auto stored_status = [&](const config::Point& pt) -> const store::PointStatus* {
+        const auto it = status_of.find(pt.label);
+        return it == status_of.end() ? nullptr : it->second;
+    };
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
         const CostEstimate e = estimate_cost(spec.points[p].scene);
         cost[p] = e.particle_steps;
         prior[p] = e.seconds;
-        for (const auto& ps : status.points)
-            if (ps.label == spec.points[p].label && ps.timed > 0) {
-                measured_s += ps.task_seconds;
-                measured_cost += ps.timed * cost[p];
-            }
+        if (const store::PointStatus* ps = stored_status(spec.points[p]); ps && ps->timed > 0) {
+            measured_s += ps->task_seconds;
+            measured_cost += ps->timed * cost[p];
+        }
     }
     const bool measured = measured_cost > 0;
     const double per_cost = measured ? measured_s / measured_cost : 0.0;
     out << "dry run: " << c.sweep.path.string() << " on " << store_path.string()
         << (existing ? "" : " (new)") << "; nothing is run or written\n";
-    char line[512];
-    std::snprintf(line, sizeof line, "%-40s %9s %7s %7s %12s %11s\n", "point", "particles",
+    // The point column as wide as the longest label (at least 40): a label cut short can hide
+    // what tells two points apart ("hopper.particles=3" for 300 and for 3000).
+    int width = 40;
+    for (const auto& pt : spec.points)
+        width = std::max(width, static_cast<int>(pt.label.size()));
+    std::vector<char> buffer(static_cast<std::size_t>(width) + 128);
+    char* const line = buffer.data();
+    const std::size_t line_size = buffer.size();
+    std::snprintf(line, line_size, "%-*s %9s %7s %7s %12s %11s\n", width, "point", "particles",
                   "stored", "to run", "s/realiz.", "core-hours");
     out << line;
+    // With a target, what the run would do now: its rounds replayed from the stored results
+    // (as `campaign run` and `campaign status` do), not the store's plan, which a journal
+    // written before issue 29 fills with every seed up to max_realizations.
+    std::vector<int> missing(spec.points.size(), 0);
+    if (spec.target) {
+        std::map<std::string, PointResults> results;
+        if (existing)
+            for (auto& r : store::read_journal_realizations(store_path))
+                results[r.label][r.record.realization] = std::move(r.result);
+        std::vector<double> expected;
+        for (const auto& pt : spec.points)
+            expected.push_back(expected_cost(pt.scene));
+        const RoundState rounds = replay_rounds(spec, results, expected);
+        if (!rounds.finished)
+            for (const auto& [p, i] : rounds.missing)
+                ++missing[std::size_t(p)];
+    }
     double total_h = 0.0;
     int total_runs = 0;
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
         const auto& pt = spec.points[p];
-        int stored = 0;
-        for (const auto& t : c.tasks) {
-            if (static_cast<std::size_t>(t.point_index) != p) continue;
-            for (const auto& ps : status.points)
-                if (ps.label == pt.label) {
-                    // Stored results (failed ones included) count from the lowest index.
-                    const int results = ps.done + ps.failed - ps.errors;
-                    if (t.realization < results) ++stored;
-                }
-        }
-        const int planned = static_cast<int>(std::count_if(
-            c.tasks.begin(), c.tasks.end(),
-            [&](const config::Task& t) { return static_cast<std::size_t>(t.point_index) == p; }));
-        const int to_run = planned - stored;
+        const store::PointStatus* ps = stored_status(pt);
+        // Stored results (failed ones included) count from the lowest index.
+        const int results = ps ? ps->done + ps->failed - ps->errors : 0;
+        // Planned now: every realization, or with a target what the current round still lacks
+        // (not max_realizations, issue 29).
+        const int stored = std::clamp(results, 0, pt.realizations);
+        const int to_run = spec.target ? missing[p] : pt.realizations - stored;
         const double each = measured ? cost[p] * per_cost : prior[p];
         const double hours = to_run * each / 3600.0;
         total_h += hours;
         total_runs += to_run;
         if (totals && to_run > 0) totals->longest_seconds = std::max(totals->longest_seconds, each);
-        std::snprintf(line, sizeof line, "%-40s %9d %7d %7d %12.1f %11.3f\n",
-                      pt.label.substr(0, 40).c_str(), pt.scene.particles.count, stored, to_run,
-                      each, hours);
+        std::snprintf(line, line_size, "%-*s %9d %7d %7d %12.1f %11.3f\n", width, pt.label.c_str(),
+                      pt.scene.particles.count, stored, to_run, each, hours);
         out << line;
     }
-    std::snprintf(line, sizeof line, "%-40s %9s %7s %7d %12s %11.3f\n", "total", "", "", total_runs,
-                  "", total_h);
+    std::snprintf(line, line_size, "%-*s %9s %7s %7d %12s %11.3f\n", width, "total", "", "",
+                  total_runs, "", total_h);
     out << line;
     if (totals) {
         totals->worker_seconds = total_h * 3600.0;
         totals->realizations = total_runs;
     }
+    if (spec.target)
+        out << "target " << config::to_string(spec.target->quantity)
+            << ": 'to run' is the current round; each point that needs more gets "
+            << spec.target->round
+            << " more per round, up to max_realizations = " << spec.target->max_realizations
+            << " (later rounds depend on the results)\n";
     out << "basis: cost model (mobile particles x time steps: settling the packing, emptying it "
            "at the 2-D Beverloo rate of the outlet and wall angle, jams and shakes; "
            "docs/performance.md) x ";

@@ -14,6 +14,7 @@
 
 #include "cli/parse.hpp"
 #include "hopper/analysis/store_analysis.hpp"
+#include "hopper/campaign/point_columns.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/journal.hpp"
 #include "hopper/store/store.hpp"
@@ -81,7 +82,8 @@ class ReaderView {
         fs::remove_all(dir_);
         fs::create_directories(dir_);
         path_ = (dir_ / fs::path(store).filename()).string();
-        const store::Snapshot snap = store::write_snapshot(store, path_);
+        const store::Snapshot snap =
+            store::write_snapshot(store, path_, campaign::point_parameter_columns);
         std::cerr << "campaign: note: "
                   << (snap.writer_active ? "a `campaign run` is writing '" + store + "'"
                                          : "the HDF5 file '" + store +
@@ -251,7 +253,8 @@ int export_command(const std::vector<std::string>& args) {
                 "the snapshot");
         const std::string& out = vm["snapshot"].as<std::string>();
         if (out.empty()) throw core::ConfigError("--snapshot must not be empty");
-        const store::Snapshot snap = store::write_snapshot(store, out);
+        const store::Snapshot snap =
+            store::write_snapshot(store, out, campaign::point_parameter_columns);
         std::cout << "snapshot: " << out << " (" << snap.realizations << " realization(s)"
                   << (snap.writer_active ? ", taken while a `campaign run` writes the store" : "")
                   << ")\n";

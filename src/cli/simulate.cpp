@@ -11,6 +11,7 @@
 #include "cli/snapshot_writer.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
+#include "hopper/campaign/stored_scenes.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/engine/realization.hpp"
@@ -29,38 +30,45 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
         throw core::ConfigError("--point: no point '" + label + "' in " + store_path.string() +
                                 "; its points are:" + labels);
     }
-    if (realization < 0 || realization >= p->realizations())
+    if (realization < 0 || realization >= p->max_realizations())
         throw core::ConfigError("--realization " + std::to_string(realization) + ": point '" +
                                 label + "' has realizations 0.." +
-                                std::to_string(p->realizations() - 1));
-    // The scene: from the sweep texts the store recorded, newest run first; the point's stored
-    // scene text (every parameter) must come out exactly, so the physics is the stored one.
-    for (auto r = st.runs.rbegin(); r != st.runs.rend(); ++r) {
-        config::SweepFile sweep;
-        try {
-            sweep = config::parse_sweep(r->info.sweep_text, r->info.sweep_path);
-        } catch (const core::ConfigError&) {
-            continue;  // a sweep file this version no longer reads
-        }
-        for (const auto& q : sweep.campaign.points) {
-            if (q.label != label) continue;
-            if (campaign::scene_text(q.scene) != p->scene) break;
-            // The outlet and angle as the sweep file wrote them (typed settings).
-            const auto written = [&q](const char* name, double fallback) {
-                for (const auto& s : q.settings)
-                    if (s.name == name && std::holds_alternative<double>(s.value))
-                        return std::get<double>(s.value);
-                return fallback;
-            };
-            return {q.scene, p->seeds[static_cast<std::size_t>(realization)],
-                    written("D_cm", p->D_cm), written("theta_deg", p->theta_deg),
-                    r->info.sweep_path};
+                                std::to_string(p->max_realizations() - 1));
+    // A target campaign's plan lists the seeds of its rounds so far; later ones are derived
+    // (the plan's typed settings are recorded with every plan that has a limit).
+    const std::uint64_t seed = realization < p->realizations()
+                                   ? p->seeds[static_cast<std::size_t>(realization)]
+                                   : config::derive_seed(st.plan.seed, p->settings, realization);
+    // The scene: rebuilt from the point's typed parameters, or for a store older than them from
+    // the sweep texts the store recorded (campaign::point_scenes); either way its fingerprint is
+    // the stored one, so the physics is the stored one.
+    const std::size_t i = static_cast<std::size_t>(p - st.plan.points.data());
+    std::optional<engine::SceneParams> scene = campaign::typed_scene(*p);
+    std::string sweep_path = st.runs.empty() ? std::string() : st.runs.back().info.sweep_path;
+    std::vector<core::Setting> written = p->parameters;
+    if (!scene) {
+        const auto recorded = campaign::recorded_points(
+            st.plan, st.runs, [p](const store::PointPlan& q) { return &q == p; });
+        if (recorded[i]) {
+            scene = recorded[i]->point.scene;
+            sweep_path = recorded[i]->sweep_path;
+            written = recorded[i]->point.parameters;
         }
     }
-    throw core::ConfigError("--point '" + label + "': none of the " +
-                            std::to_string(st.runs.size()) +
-                            " sweep file(s) recorded in the store gives its stored physics with "
-                            "this version of hopper");
+    if (!scene)
+        throw core::ConfigError("--point '" + label + "': neither its stored parameters nor the " +
+                                std::to_string(st.runs.size()) +
+                                " sweep file(s) recorded in the store give its stored physics with "
+                                "this version of hopper");
+    // The outlet and angle as the sweep file wrote them (typed parameters).
+    const auto as_written = [&written](const char* name, double fallback) {
+        for (const auto& s : written)
+            if (s.name == name && std::holds_alternative<double>(s.value))
+                return std::get<double>(s.value);
+        return fallback;
+    };
+    return {*scene, seed, as_written("D_cm", p->D_cm), as_written("theta_deg", p->theta_deg),
+            sweep_path};
 }
 
 int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& err) {

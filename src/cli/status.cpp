@@ -13,6 +13,7 @@
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/running.hpp"
+#include "hopper/campaign/stored_scenes.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/store/codec.hpp"
@@ -74,17 +75,13 @@ ProgressEstimate estimate_progress(const store::StoreStatus& s, double now_unix)
     const double start = iso_to_unix(last.info.start_time);
     const double end = last.end ? iso_to_unix(last.end->end_time) : now_unix;
     if (start > 0 && end > start) e.per_hour = last.stored / (end - start) * 3600.0;
-    // Cost of one realization of each point, from the newest sweep text that has the point.
+    // Cost of one realization of each point, from its scene (typed parameters, or for a store
+    // older than them the recorded sweep texts: campaign::point_scenes).
     std::map<std::string, double> cost;
-    for (auto r = s.runs.rbegin(); r != s.runs.rend(); ++r) {
-        try {
-            const auto sweep = config::parse_sweep(r->info.sweep_text, r->info.sweep_path);
-            for (const auto& p : sweep.campaign.points)
-                cost.try_emplace(p.label, campaign::expected_cost(p.scene));
-        } catch (const std::exception&) {
-            // a sweep text this version no longer reads: its points keep the mean cost
-        }
-    }
+    const auto scenes = campaign::point_scenes(s.plan, s.runs);
+    for (std::size_t i = 0; i < scenes.size(); ++i)
+        if (scenes[i])
+            cost.try_emplace(s.plan.points[i].label, campaign::expected_cost(*scenes[i]));
     double known = 0.0;
     for (const auto& [label, c] : cost)
         known += c;
@@ -162,6 +159,7 @@ std::string status_json(const store::StoreStatus& s) {
     for (const auto& p : s.points)
         points.push_back(Json{{"label", p.label},
                               {"total", p.planned},
+                              {"limit", p.limit},
                               {"done", p.done},
                               {"failed", p.failed},
                               {"errors", p.errors},
@@ -261,17 +259,28 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
             << " (they continue from it in the next run)\n";
     if (!s.points.empty()) {
         std::size_t width = 5;
-        for (const auto& p : s.points)
+        bool limits = false;  // a target campaign: its rounds so far, then "up to" its limit
+        for (const auto& p : s.points) {
             width = std::max(width, p.label.size());
+            limits = limits || p.limit > p.planned;
+        }
         char buf[512];
-        std::snprintf(buf, sizeof buf, "\n%-*s  %7s  %7s  %7s  %7s\n", static_cast<int>(width),
-                      "point", "total", "done", "failed", "pending");
+        std::snprintf(buf, sizeof buf, "\n%-*s  %7s  %7s  %7s  %7s%s\n", static_cast<int>(width),
+                      "point", "total", "done", "failed", "pending", limits ? "    up to" : "");
         out << buf;
         for (const auto& p : s.points) {
-            std::snprintf(buf, sizeof buf, "%-*s  %7d  %7d  %7d  %7d\n", static_cast<int>(width),
+            std::snprintf(buf, sizeof buf, "%-*s  %7d  %7d  %7d  %7d", static_cast<int>(width),
                           p.label.c_str(), p.planned, p.done, p.failed, p.pending);
             out << buf;
+            if (limits) {
+                std::snprintf(buf, sizeof buf, "  %7d", p.limit);
+                out << buf;
+            }
+            out << '\n';
         }
+        if (limits)
+            out << "(total: the realizations the rounds allotted so far; up to: "
+                   "max_realizations)\n";
     }
     if (!s.failures.empty()) {
         out << "\nfailures\n";
@@ -283,21 +292,15 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
     }
 }
 
-// A campaign with a target (adaptive.hpp) plans max_realizations per point but runs only what
-// its rounds decide: pending is what the current round still lacks (0 once the target is met),
+// A campaign with a target (adaptive.hpp) runs up to max_realizations per point, as its rounds
+// decide: pending is what the current round still lacks (0 once the target is met),
 // replayed from the stored results as `campaign run` does. Without this, the batch script would
 // resubmit a finished target campaign up to its cap. Returns the description of the rounds
 // (empty without a target).
 std::string apply_target(store::StoreStatus& s) {
-    if (s.runs.empty()) return {};
-    config::SweepFile sweep;
-    try {
-        sweep = config::parse_sweep(s.runs.back().info.sweep_text, s.runs.back().info.sweep_path);
-    } catch (const std::exception&) {
-        return {};  // a sweep text this version no longer reads: the plan's counts stand
-    }
-    const auto& spec = sweep.campaign;
-    if (!spec.target) return {};
+    const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
+    if (!recorded || !recorded->target) return {};
+    const config::CampaignSpec& spec = *recorded;
     std::map<std::string, campaign::PointResults> stored;
     for (auto& r : store::read_journal_realizations(s.store))
         stored[r.label][r.record.realization] = std::move(r.result);

@@ -1,9 +1,9 @@
 #pragma once
-// The config layer's private pieces (not installed): the key table -- every scene parameter a
-// sweep file may set, under its one canonical name, with its type, range, unit, how it lands in
-// SceneParams and how it reads back out of one -- and the text helpers the parser's messages
-// share. The table is the single list of setting names: labels, seeds, `parameter_names()` and
-// the typed `parameters` of a point (core::Setting) all come from it.
+// The config layer's private pieces (not installed): the key table -- the rows of the scene
+// schema (hopper/config/scene_schema.hpp) that a sweep file may set, under their one canonical
+// name -- and the text helpers the parser's messages share. The table is the single list of setting
+// names: labels, seeds, `parameter_names()` and the typed `parameters` of a point (core::Setting)
+// all come from it.
 
 #include <array>
 #include <optional>
@@ -12,32 +12,20 @@
 #include <variant>
 #include <vector>
 
+#include "hopper/config/scene_schema.hpp"
 #include "hopper/core/setting.hpp"
 #include "hopper/engine/params.hpp"
 
 namespace hopper::config::detail {
 
-using Value = std::variant<double, std::string>;
-using Read = std::optional<Value>;  // absent: an optional parameter that is unset
+// The rows are the scene schema's (hopper/config/scene_schema.hpp); these names are the parser's.
+using Value = SchemaValue;
+using Read = SchemaRead;
+using Kind = ValueKind;
+using KeyDef = SchemaRow;
 
-enum class Kind { real, integer, choice, boolean };
-
-struct KeyDef {
-    std::string_view section;  // the file's table: "hopper", "material", ...
-    std::string_view key;      // the key inside it: "width_cm"
-    std::string_view name;     // canonical setting name: "hopper.width_cm", "D_cm"
-    Kind kind;
-    double lo, hi;
-    bool open_lo, open_hi;
-    std::string_view unit;  // unit in the file, for messages ("" = dimensionless)
-    void (*apply)(engine::SceneParams&, const Value&);
-    // The value in file units (the inverse of apply): what a scene that was not given this key
-    // has, so that a point's `parameters` list every key.
-    Read (*read)(const engine::SceneParams&);
-    std::string_view choices = {};  // Kind::choice: the allowed strings, comma-separated
-};
-
-// The table, in the order of campaigns/README.md: D_cm, theta_deg, then by section.
+// The rows a sweep file may set (every row of scene_schema() but those not in the file), in the
+// order of campaigns/README.md: D_cm, theta_deg, then by section.
 const std::vector<KeyDef>& key_table();
 
 inline constexpr std::array<std::string_view, 6> scene_sections = {
@@ -46,6 +34,9 @@ inline constexpr std::array<std::string_view, 6> scene_sections = {
 bool is_scene_section(std::string_view s);
 const KeyDef* find_key(std::string_view section, std::string_view key);
 const KeyDef* find_name(std::string_view name);
+// The row a quoted key such as "material.mu" names (TOML reads it as one key with a dot in it,
+// not as mu inside material; users mean the latter), or nullptr when it names none.
+const KeyDef* quoted_dotted_key(std::string_view name);
 std::vector<std::string> keys_of(std::string_view section);
 
 // Canonical order of settings: D_cm, theta_deg, then by name.

@@ -132,6 +132,9 @@ std::vector<PointDraft> Parser::read_sweep(const toml::node& node) const {
                 }
                 read_axis(*d, v2);
             }
+        } else if (const KeyDef* quoted = quoted_dotted_key(key)) {
+            // "material.mu" = [...] (quoted, one TOML key) means what material.mu = [...] does
+            read_axis(*quoted, v);
         } else {
             std::string shown = key;
             if (auto sub = v.as_table(); sub && !sub->empty())
@@ -196,6 +199,9 @@ std::vector<PointDraft> Parser::read_points(const toml::node& node) const {
                 p.overrides.push_back(Given{d, read_value(v, *d)});
             } else if (key == "realizations") {
                 p.realizations = read_realizations(v, origin + " realizations");
+            } else if (const KeyDef* quoted = quoted_dotted_key(key)) {
+                // "walls.mu" = 0.5 (quoted, one TOML key) means what walls = { mu = 0.5 } does
+                p.overrides.push_back(Given{quoted, read_value(v, *quoted)});
             } else if (is_scene_section(key)) {
                 const auto* sub = v.as_table();
                 if (!sub)

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 
 #include "config/key_table.hpp"
 #include "config/parser.hpp"
@@ -93,11 +94,9 @@ std::vector<std::string> parameter_names() {
 
 std::optional<core::Setting> default_parameter(std::string_view name) {
     static const engine::SceneParams defaults{};
-    for (const auto& d : key_table())
-        if (d.name == name) {
-            if (auto v = d.read(defaults)) return core::Setting{std::string(name), std::move(*v)};
-            return std::nullopt;
-        }
+    const KeyDef* d = find_name(name);
+    if (!d) return std::nullopt;
+    if (auto v = d->read(defaults)) return core::Setting{std::string(name), std::move(*v)};
     return std::nullopt;
 }
 
@@ -120,22 +119,53 @@ std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<core::S
     return core::mix_seed(seed, static_cast<std::uint64_t>(realization));
 }
 
-std::vector<Task> expand_tasks(const CampaignSpec& spec) {
-    std::vector<Task> tasks;
+TaskList::TaskList(const CampaignSpec& spec) : seed_(spec.seed) {
     long long total = 0;
+    offset_.reserve(spec.points.size() + 1);
+    settings_.reserve(spec.points.size());
     for (const auto& p : spec.points) {
         if (p.realizations < 0)
             throw ConfigError("point '" + p.label + "' has a negative number of realizations");
+        offset_.push_back(total);
+        settings_.push_back(p.settings);
         total += p.realizations;
     }
     if (total > INT_MAX) throw ConfigError("the campaign has too many tasks for one list");
-    tasks.reserve(static_cast<std::size_t>(total));
-    int id = 0;
-    for (int pi = 0; pi < static_cast<int>(spec.points.size()); ++pi) {
-        const Point& p = spec.points[static_cast<std::size_t>(pi)];
-        for (int r = 0; r < p.realizations; ++r)
-            tasks.push_back(Task{id++, pi, r, derive_seed(spec.seed, p.settings, r)});
-    }
+    offset_.push_back(total);
+}
+
+int TaskList::realizations(int point) const {
+    if (point < 0 || point >= points())
+        throw std::out_of_range("point " + std::to_string(point) + " is not in the list");
+    const auto p = static_cast<std::size_t>(point);
+    return static_cast<int>(offset_[p + 1] - offset_[p]);
+}
+
+Task TaskList::at(int task_id) const {
+    if (task_id < 0 || task_id >= size())
+        throw std::out_of_range("task id " + std::to_string(task_id) + " is not in the list");
+    // The last point whose first id is <= task_id (points of no realizations share an offset).
+    const auto it = std::upper_bound(offset_.begin(), offset_.end() - 1, task_id);
+    const int point = static_cast<int>(it - offset_.begin()) - 1;
+    return at(point, task_id - static_cast<int>(offset_[static_cast<std::size_t>(point)]));
+}
+
+Task TaskList::at(int point, int realization) const {
+    if (realization < 0 || realization >= realizations(point))
+        throw std::out_of_range("realization " + std::to_string(realization) + " of point " +
+                                std::to_string(point) + " is not in the list");
+    const auto p = static_cast<std::size_t>(point);
+    return Task{static_cast<int>(offset_[p]) + realization, point, realization,
+                derive_seed(seed_, settings_[p], realization)};
+}
+
+std::vector<Task> expand_tasks(const CampaignSpec& spec) {
+    const TaskList list(spec);
+    std::vector<Task> tasks;
+    tasks.reserve(static_cast<std::size_t>(list.size()));
+    for (int p = 0; p < list.points(); ++p)
+        for (int r = 0; r < list.realizations(p); ++r)
+            tasks.push_back(list.at(p, r));
     return tasks;
 }
 

@@ -108,6 +108,8 @@ void write_dataset(const h5::Id& loc, const DerivedDataset& d) {
     h5::set_attr(ds, "description", d.description);
     if (!std::holds_alternative<std::vector<std::string>>(d.values))
         h5::set_attr(ds, "units", d.units.empty() ? std::string("1") : d.units);
+    for (const auto& [k, v] : d.attributes)
+        h5::set_attr(ds, k, v);
 }
 
 void write_group(const h5::Id& parent, const DerivedGroup& g) {

@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cstring>
 #include <mutex>
 #include <type_traits>
 
@@ -303,6 +304,22 @@ void set_attr(const Id& loc, const std::string& name, const std::string& value) 
     check_status(H5Awrite(a.get(), type.get(), &p), "cannot write attribute '" + name + "'");
 }
 
+void set_attr(const Id& loc, const std::string& name, const std::vector<std::string>& values) {
+    delete_attr_if_present(loc, name);
+    Id type = string_type();
+    const hsize_t dims[1] = {values.size()};
+    Id space = make(H5Screate_simple(1, dims, nullptr), "cannot create a dataspace");
+    Id a =
+        make(H5Acreate2(loc.get(), name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+             "cannot create attribute '" + name + "'");
+    std::vector<const char*> p;
+    for (const auto& v : values)
+        p.push_back(v.c_str());
+    if (!p.empty())
+        check_status(H5Awrite(a.get(), type.get(), p.data()),
+                     "cannot write attribute '" + name + "'");
+}
+
 namespace {
 void set_numeric_attr(const Id& loc, const std::string& name, hid_t type, const void* v) {
     delete_attr_if_present(loc, name);
@@ -461,6 +478,73 @@ Id write_array(const Id& loc, const std::string& name, hid file_type, hid mem_ty
                  what);
     if (n > 0)
         check_status(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), what);
+    return ds;
+}
+
+Id write_records(const Id& loc, const std::string& name, const std::vector<RecordField>& fields,
+                 hsize_t n) {
+    const std::string what = "cannot write dataset '" + name + "'";
+    // Packed rows: 8 bytes per number or text pointer, 1 per flag.
+    std::vector<std::size_t> offset;
+    std::size_t row = 0;
+    for (const auto& f : fields) {
+        offset.push_back(row);
+        row += f.flag ? 1 : 8;
+    }
+    if (row == 0) throw core::StoreError(what + ": no fields");
+    Id mem = make(H5Tcreate(H5T_COMPOUND, row), what + " (type)");
+    Id file = make(H5Tcreate(H5T_COMPOUND, row), what + " (type)");
+    Id text = string_type();
+    Id flag = bool_type();
+    std::vector<unsigned char> buf(row * std::max<hsize_t>(n, 1));
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+        const auto& f = fields[i];
+        const std::size_t size = (f.f64    ? f.f64->size()
+                                  : f.i64  ? f.i64->size()
+                                  : f.text ? f.text->size()
+                                  : f.flag ? f.flag->size()
+                                           : 0);
+        if (size != n)
+            throw core::StoreError(what + ": field '" + f.name + "' has the wrong length");
+        hid_t mt = f.f64    ? H5T_NATIVE_DOUBLE
+                   : f.i64  ? H5T_NATIVE_INT64
+                   : f.text ? text.get()
+                            : flag.get();
+        hid_t ft = f.f64 ? H5T_IEEE_F64LE : f.i64 ? H5T_STD_I64LE : mt;
+        check_status(H5Tinsert(mem.get(), f.name.c_str(), offset[i], mt),
+                     what + " (" + f.name + ")");
+        check_status(H5Tinsert(file.get(), f.name.c_str(), offset[i], ft),
+                     what + " (" + f.name + ")");
+        for (hsize_t r = 0; r < n; ++r) {
+            unsigned char* at = buf.data() + r * row + offset[i];
+            if (f.f64) {
+                std::memcpy(at, &(*f.f64)[r], 8);
+            } else if (f.i64) {
+                std::memcpy(at, &(*f.i64)[r], 8);
+            } else if (f.text) {
+                const char* p = (*f.text)[r].c_str();
+                std::memcpy(at, &p, sizeof p);
+            } else {
+                *at = (*f.flag)[r] ? 1 : 0;
+            }
+        }
+    }
+    const hsize_t dims[1] = {n};
+    const hsize_t maxdims[1] = {H5S_UNLIMITED};
+    Id space = make(H5Screate_simple(1, dims, maxdims), what + " (dataspace)");
+    Id dcpl = make(H5Pcreate(H5P_DATASET_CREATE), what + " (properties)");
+    const hsize_t chunk[1] = {std::max<hsize_t>(n, 1)};
+    check_status(H5Pset_chunk(dcpl.get(), 1, chunk), what + " (chunk)");
+    if (H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0) {
+        check_status(H5Pset_shuffle(dcpl.get()), what + " (shuffle)");
+        check_status(H5Pset_deflate(dcpl.get(), 1), what + " (deflate)");
+    }
+    Id ds = make(H5Dcreate2(loc.get(), name.c_str(), file.get(), space.get(), H5P_DEFAULT,
+                            dcpl.get(), H5P_DEFAULT),
+                 what);
+    if (n > 0)
+        check_status(H5Dwrite(ds.get(), mem.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()),
+                     what);
     return ds;
 }
 

@@ -101,6 +101,18 @@ std::vector<std::string> read_strings(const Id& dataset, std::string_view what);
 // written whole, chunked (about 1 MB per chunk) with shuffle + deflate (unchunked when empty).
 Id write_array(const Id& loc, const std::string& name, hid file_type, hid mem_type,
                const void* data, const std::vector<hsize>& dims);
+// A 1-D table of n records (one compound dataset), written whole, chunked with shuffle +
+// deflate: one member per field, in order. Each field points at n values: numbers (f64 or i64),
+// texts (variable-length UTF-8) or flags (the bool enum).
+struct RecordField {
+    std::string name;
+    const std::vector<double>* f64 = nullptr;
+    const std::vector<std::int64_t>* i64 = nullptr;
+    const std::vector<std::string>* text = nullptr;
+    const std::vector<bool>* flag = nullptr;
+};
+Id write_records(const Id& loc, const std::string& name, const std::vector<RecordField>& fields,
+                 hsize n);
 // The dimensions of a dataset, any rank.
 std::vector<hsize> dims_of(const Id& dataset);
 // Reads a whole dataset of any rank (nothing when it has no elements).
@@ -108,6 +120,8 @@ void read_array(const Id& dataset, hid mem_type, void* data, std::string_view wh
 
 // Attributes (scalar). Replaces an existing attribute of the same name.
 void set_attr(const Id& loc, const std::string& name, const std::string& value);
+// A 1-D attribute of strings (variable-length UTF-8), one per element.
+void set_attr(const Id& loc, const std::string& name, const std::vector<std::string>& values);
 void set_attr(const Id& loc, const std::string& name, std::int64_t value);
 void set_attr_u64(const Id& loc, const std::string& name, std::uint64_t value);
 void set_attr(const Id& loc, const std::string& name, double value);

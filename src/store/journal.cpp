@@ -141,7 +141,7 @@ JournalScan scan_fd(int fd, const fs::path& path, const RecordVisitor& visit) {
             break;
         }
         const std::uint8_t type = h[4];
-        if (type < 1 || type > 5)
+        if (type < 1 || type > 6)
             throw core::StoreError(where + ": unknown record type " + std::to_string(type) +
                                    " at byte " + std::to_string(pos) +
                                    " (written by a newer version?)");
@@ -149,8 +149,8 @@ JournalScan scan_fd(int fd, const fs::path& path, const RecordVisitor& visit) {
             visit(static_cast<RecordType>(type), pos, payload);
         } catch (const core::StoreError& e) {
             // Name the file and the record: the decoders only know what they were reading.
-            static const char* const names[] = {"",      "run start", "result",
-                                                "error", "run end",   "sync"};
+            static const char* const names[] = {"",        "run start", "result",   "error",
+                                                "run end", "sync",      "allotment"};
             throw core::StoreError(where + " is damaged: its " + names[type] + " record at byte " +
                                    std::to_string(pos) + " has a valid checksum but cannot be " +
                                    "used: " + e.what());

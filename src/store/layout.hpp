@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "hopper/store/store.hpp"
 #include "state.hpp"
 
 namespace hopper::store::layout {
@@ -22,14 +23,18 @@ class Writer {
   public:
     // A new file with every group and dataset of the schema, empty (truncates `path`).
     // `journal_name` is the file name of the journal, recorded as an attribute.
-    static Writer create(const std::filesystem::path& path, const std::string& journal_name);
+    // `parameters` (optional) gives /points/parameters, rewritten with /points.
+    static Writer create(const std::filesystem::path& path, const std::string& journal_name,
+                         PointParameters parameters = {});
     // An existing store file, for appending.
-    static Writer open(const std::filesystem::path& path);
+    static Writer open(const std::filesystem::path& path, PointParameters parameters = {});
     Writer(Writer&&) noexcept;
     Writer& operator=(Writer&&) noexcept;
     ~Writer();  // closes without marking the file consistent
 
     void run_start(const State& s, bool plan_changed);
+    // A target campaign's next round allotted realizations (the /points and /tasks tables).
+    void allotment(const State& s, bool plan_changed);
     void result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                 const engine::RealizationResult& r);
     void error(const State& s, int point, const ErrorRecord& rec);

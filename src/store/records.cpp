@@ -65,6 +65,27 @@ std::vector<core::Setting> get_settings(ByteReader& r) {
     return out;
 }
 
+// A list of seeds: its count, then each. Read back with the count checked against the bytes left.
+void put_seeds(ByteWriter& w, const std::vector<std::uint64_t>& seeds) {
+    w.u32(static_cast<std::uint32_t>(seeds.size()));
+    for (auto s : seeds)
+        w.u64(s);
+}
+
+std::vector<std::uint64_t> get_seeds(ByteReader& r) {
+    const std::uint32_t n = r.u32();
+    if (static_cast<std::uint64_t>(n) * 8 > r.remaining())
+        r.fail("a realization count of " + std::to_string(n) + " exceeds the bytes left");
+    std::vector<std::uint64_t> seeds(n);
+    for (auto& s : seeds)
+        s = r.u64();
+    return seeds;
+}
+
+// The plan's sections after the seeds: settings (no marker: records ended after the seeds
+// before them), then a format number and what it adds.
+constexpr std::uint32_t plan_format_limits = 2;
+
 void put(ByteWriter& w, const CampaignPlan& p) {
     w.str(p.name);
     w.u64(p.seed);
@@ -75,9 +96,7 @@ void put(ByteWriter& w, const CampaignPlan& p) {
         w.f64(pt.D_cm);
         w.f64(pt.theta_deg);
         w.i32(pt.particles);
-        w.u32(static_cast<std::uint32_t>(pt.seeds.size()));
-        for (auto s : pt.seeds)
-            w.u64(s);
+        put_seeds(w, pt.seeds);
     }
     // Typed settings (added later, after every point, so that records written before them end
     // here and read back with empty vectors): per point its settings, then its parameters.
@@ -85,6 +104,11 @@ void put(ByteWriter& w, const CampaignPlan& p) {
         put(w, pt.settings);
         put(w, pt.parameters);
     }
+    // Plan format 2 (issue 29), after the settings so that records written before end there:
+    // per point its limit (the seeds then list only the allotted realizations).
+    w.u32(plan_format_limits);
+    for (const auto& pt : p.points)
+        w.i32(pt.max_realizations());
 }
 
 CampaignPlan get_plan(ByteReader& r) {
@@ -100,18 +124,29 @@ CampaignPlan get_plan(ByteReader& r) {
         pt.D_cm = r.f64();
         pt.theta_deg = r.f64();
         pt.particles = r.i32();
-        const std::uint32_t ns = r.u32();
-        if (static_cast<std::uint64_t>(ns) * 8 > r.remaining())
-            r.fail("a realization count of " + std::to_string(ns) + " exceeds the bytes left");
-        pt.seeds.resize(ns);
-        for (auto& s : pt.seeds)
-            s = r.u64();
+        pt.seeds = get_seeds(r);
     }
     if (r.remaining() > 0)
         for (auto& pt : p.points) {
             pt.settings = get_settings(r);
             pt.parameters = get_settings(r);
         }
+    if (r.remaining() > 0) {
+        const std::uint32_t format = r.u32();
+        if (format != plan_format_limits)
+            r.fail("plan format " + std::to_string(format) +
+                   " is unknown (written by a newer "
+                   "version?)");
+        for (auto& pt : p.points) {
+            pt.limit = r.i32();
+            if (pt.limit < pt.realizations())
+                r.fail("point '" + pt.label + "' has a limit of " + std::to_string(pt.limit) +
+                       " realizations below its " + std::to_string(pt.realizations()) + " seeds");
+        }
+    } else {
+        for (auto& pt : p.points)
+            pt.limit = pt.realizations();  // plans before issue 29 list every seed
+    }
     return p;
 }
 
@@ -261,6 +296,33 @@ SyncRecord decode_sync(std::span<const std::uint8_t> b) {
         f.bytes = in.u64();
         f.crc32c = in.u32();
         r.file = f;
+    }
+    in.expect_end();
+    return r;
+}
+
+Bytes encode(const AllotmentRecord& r) {
+    ByteWriter w;
+    w.u32(static_cast<std::uint32_t>(r.points.size()));
+    for (const auto& p : r.points) {
+        w.str(p.label);
+        w.i32(p.first);
+        put_seeds(w, p.seeds);
+    }
+    return w.take();
+}
+
+AllotmentRecord decode_allotment(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal allotment record");
+    AllotmentRecord r;
+    const std::uint32_t n = in.u32();
+    if (n > in.remaining()) in.fail("a point count of " + std::to_string(n) + " is impossible");
+    r.points.resize(n);
+    for (auto& p : r.points) {
+        p.label = in.str();
+        p.first = in.i32();
+        if (p.first < 0) in.fail("a negative first realization " + std::to_string(p.first));
+        p.seeds = get_seeds(in);
     }
     in.expect_end();
     return r;

@@ -74,29 +74,58 @@ std::uint64_t State::seed_of(int point, int realization) const {
                : 0;
 }
 
-bool State::apply(const RunStartRecord& r) {
+bool State::extend_seeds(int point, int first, std::span<const std::uint64_t> seeds) {
+    auto& mine = plan.points[static_cast<std::size_t>(point)];
+    const std::size_t end = static_cast<std::size_t>(first) + seeds.size();
+    if (static_cast<std::size_t>(first) > mine.seeds.size())
+        throw core::StoreError("journal extends point '" + mine.label + "' from realization " +
+                               std::to_string(first) + " but plans only " +
+                               std::to_string(mine.seeds.size()) + " (damaged journal)");
+    if (end <= mine.seeds.size()) return false;
+    // Seeds depend only on (campaign seed, settings, index): the prefix is the same.
+    const std::size_t have = mine.seeds.size() - static_cast<std::size_t>(first);
+    mine.seeds.insert(mine.seeds.end(), seeds.begin() + static_cast<std::ptrdiff_t>(have),
+                      seeds.end());
+    mine.limit = std::max(mine.limit, mine.realizations());
+    auto& t = tasks[static_cast<std::size_t>(point)];
+    if (t.size() < mine.seeds.size()) t.resize(mine.seeds.size());
+    return true;
+}
+
+bool State::apply(RunStartRecord&& r) {
     bool changed = false;
     if (plan.points.empty() && runs.empty()) plan.seed = r.plan.seed;
     plan.name = r.plan.name;
-    for (const auto& p : r.plan.points) {
+    for (auto& p : r.plan.points) {
         const int i = find_point(p.label);
         if (i < 0) {
             point_index[p.label] = static_cast<int>(plan.points.size());
-            plan.points.push_back(p);
             tasks.emplace_back(p.seeds.size());
+            p.limit = p.max_realizations();
+            plan.points.push_back(std::move(p));
             changed = true;
             continue;
         }
         auto& mine = plan.points[static_cast<std::size_t>(i)];
-        if (p.seeds.size() > mine.seeds.size()) {
-            // Seeds depend only on (campaign seed, label, index): the prefix is the same.
-            mine.seeds = p.seeds;
-            auto& t = tasks[static_cast<std::size_t>(i)];
-            if (t.size() < mine.seeds.size()) t.resize(mine.seeds.size());
+        if (p.max_realizations() > mine.limit) {
+            mine.limit = p.max_realizations();
             changed = true;
         }
+        if (extend_seeds(i, 0, p.seeds)) changed = true;
     }
-    runs.push_back(RunSummary{r.run, std::nullopt, 0, {}});
+    runs.push_back(RunSummary{std::move(r.run), std::nullopt, 0, {}});
+    return changed;
+}
+
+bool State::apply(const AllotmentRecord& r) {
+    bool changed = false;
+    for (const auto& p : r.points) {
+        const int i = find_point(p.label);
+        if (i < 0)
+            throw core::StoreError("journal allots realizations to point '" + p.label +
+                                   "', which no run planned (damaged journal)");
+        if (extend_seeds(i, p.first, p.seeds)) changed = true;
+    }
     return changed;
 }
 
@@ -158,6 +187,7 @@ StoreStatus State::status() const {
         PointStatus ps;
         ps.label = plan.points[p].label;
         ps.planned = plan.points[p].realizations();
+        ps.limit = plan.points[p].max_realizations();
         const auto& t = tasks[p];
         for (std::size_t r = 0; r < t.size(); ++r) {
             const TaskEntry& e = t[r];
@@ -215,9 +245,8 @@ void apply_record(State& state, RecordType type, std::uint64_t offset,
                   std::span<const std::uint8_t> payload, ReplaySink* sink) {
     switch (type) {
         case RecordType::run_start: {
-            const RunStartRecord r = decode_run_start(payload);
-            const bool changed = state.apply(r);
-            if (sink) sink->run_start(state, r, changed);
+            const bool changed = state.apply(decode_run_start(payload));
+            if (sink) sink->run_start(state, changed);
             break;
         }
         case RecordType::result: {
@@ -243,6 +272,12 @@ void apply_record(State& state, RecordType type, std::uint64_t offset,
         case RecordType::sync:
             state.last_sync = decode_sync(payload);
             break;
+        case RecordType::allotment: {
+            const AllotmentRecord r = decode_allotment(payload);
+            const bool changed = state.apply(r);
+            if (sink) sink->allotment(state, changed);
+            break;
+        }
     }
     state.last_type = type;
     state.last_offset = offset;

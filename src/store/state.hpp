@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -31,7 +32,10 @@ struct State {
 
     // Each returns what changed, for the HDF5 writer.
     // True when the union plan changed (new points or realizations).
-    bool apply(const RunStartRecord& r);
+    // Takes the record's points and run (a plan of 10^5 points is large: no copy).
+    bool apply(RunStartRecord&& r);
+    // True when an allotment grew (a target campaign's next round).
+    bool apply(const AllotmentRecord& r);
     // The row of the new result, or -1 for a duplicate (ignored). Throws for an unknown point.
     std::int64_t apply(const ResultRecord& r, const engine::RealizationResult& result);
     // The point index (throws for an unknown point).
@@ -42,6 +46,9 @@ struct State {
     // the last record is a sync record written right after the file was closed at that length.
     bool closed_in_step() const;
     int find_point(const std::string& label) const;
+    // Lists the seeds of realizations [first, first + seeds.size()) of a point; true when its
+    // allotment grew. Throws when `first` leaves a gap.
+    bool extend_seeds(int point, int first, std::span<const std::uint64_t> seeds);
     std::uint64_t seed_of(int point, int realization) const;
     StoreStatus status() const;
 };
@@ -63,11 +70,13 @@ ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& 
 // after it was applied (for rebuilding the HDF5 file).
 struct ReplaySink {
     virtual ~ReplaySink() = default;
-    virtual void run_start(const State&, const RunStartRecord&, bool /*plan_changed*/) {}
+    // The record itself is in the state (State::apply takes it).
+    virtual void run_start(const State&, bool /*plan_changed*/) {}
     virtual void result(const State&, int /*point*/, std::int64_t /*row*/, const ResultRecord&,
                         const engine::RealizationResult&) {}
     virtual void error(const State&, int /*point*/, const ErrorRecord&) {}
     virtual void run_end(const State&, const RunEndRecord&) {}
+    virtual void allotment(const State&, bool /*plan_changed*/) {}
 };
 void apply_record(State& state, RecordType type, std::uint64_t offset,
                   std::span<const std::uint8_t> payload, ReplaySink* sink);

@@ -57,9 +57,7 @@ struct RebuildSink : ReplaySink {
     layout::Writer& w;
     std::int64_t since_flush = 0;
     explicit RebuildSink(layout::Writer& writer) : w(writer) {}
-    void run_start(const State& s, const RunStartRecord&, bool changed) override {
-        w.run_start(s, changed);
-    }
+    void run_start(const State& s, bool changed) override { w.run_start(s, changed); }
     void result(const State& s, int point, std::int64_t row, const ResultRecord& rec,
                 const engine::RealizationResult& r) override {
         w.result(s, point, row, rec, r);
@@ -72,14 +70,15 @@ struct RebuildSink : ReplaySink {
         w.error(s, point, rec);
     }
     void run_end(const State& s, const RunEndRecord&) override { w.run_end(s); }
+    void allotment(const State& s, bool changed) override { w.allotment(s, changed); }
 };
 
 // The HDF5 file `target` written from the journal's records before `limit` (truncates it), then
 // closed as in step with `token` and `journal_bytes` (the rebuild and the snapshot).
 void write_from_journal(const fs::path& jpath, std::uint64_t limit, const fs::path& target,
                         const std::string& journal_name, std::uint64_t token,
-                        std::uint64_t journal_bytes) {
-    layout::Writer w = layout::Writer::create(target, journal_name);
+                        std::uint64_t journal_bytes, const PointParameters& parameters) {
+    layout::Writer w = layout::Writer::create(target, journal_name, parameters);
     State fresh;
     RebuildSink sink(w);
     scan_journal(jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
@@ -126,7 +125,8 @@ struct Store::Impl {
         std::error_code ec;
         fs::remove(tmp, ec);
         // Consistent, but not a sync point (token 0).
-        write_from_journal(jpath, journal->size(), tmp, jpath.filename().string(), 0, 0);
+        write_from_journal(jpath, journal->size(), tmp, jpath.filename().string(), 0, 0,
+                           opt.point_parameters);
         fsync_path(tmp);
         crash_point("rebuild");
         fs::rename(tmp, path);
@@ -286,15 +286,15 @@ StoreStatus Store::status() const {
     return s;
 }
 
-void Store::begin_run(const RunStartRecord& run) {
+void Store::begin_run(RunStartRecord run) {
     Impl& m = *impl_;
     if (m.run_open) throw core::StoreError("internal: begin_run() twice");
     m.journal->append(RecordType::run_start, encode(run));
-    const bool changed = m.state.apply(run);
+    const bool changed = m.state.apply(std::move(run));
     m.state.last_type = RecordType::run_start;
     if (m.h5_in_step) {
         try {
-            m.writer.emplace(layout::Writer::open(m.path));
+            m.writer.emplace(layout::Writer::open(m.path, m.opt.point_parameters));
         } catch (const core::StoreError& e) {
             m.notes.push_back(std::string("cannot open the HDF5 file for writing (") + e.what() +
                               "); rebuilding it");
@@ -302,8 +302,11 @@ void Store::begin_run(const RunStartRecord& run) {
         }
     }
     if (!m.writer) {
-        m.rebuild();
-        m.writer.emplace(layout::Writer::open(m.path));
+        // The run-start record is journaled: a failed rebuild (a full disk) loses nothing.
+        m.update_view([&] {
+            m.rebuild();
+            m.writer.emplace(layout::Writer::open(m.path, m.opt.point_parameters));
+        });
     } else {
         m.writer->run_start(m.state, changed);
     }
@@ -330,6 +333,36 @@ void Store::append(const ResultRecord& r) {
     m.state.last_type = RecordType::result;
     m.update_view([&] {
         if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
+        m.maybe_flush();
+    });
+}
+
+void Store::allot(const AllotmentRecord& r) {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: allot() outside a run");
+    AllotmentRecord grow;
+    for (const auto& p : r.points) {
+        const int i = m.state.find_point(p.label);
+        if (i < 0)
+            throw core::StoreError("internal: allotment for unplanned point '" + p.label + "'");
+        const int have = m.state.plan.points[static_cast<std::size_t>(i)].realizations();
+        const int end = p.first + static_cast<int>(p.seeds.size());
+        if (end <= have) continue;
+        if (p.first > have)
+            throw core::StoreError("internal: allotment of '" + p.label + "' from realization " +
+                                   std::to_string(p.first) + " leaves a gap after " +
+                                   std::to_string(have));
+        // Only what is new: the record costs what the round adds.
+        grow.points.push_back(PointAllotment{
+            p.label, have,
+            std::vector<std::uint64_t>(p.seeds.begin() + (have - p.first), p.seeds.end())});
+    }
+    if (grow.points.empty()) return;
+    m.journal->append(RecordType::allotment, encode(grow));
+    const bool changed = m.state.apply(grow);
+    m.state.last_type = RecordType::allotment;
+    m.update_view([&] {
+        m.writer->allotment(m.state, changed);
         m.maybe_flush();
     });
 }
@@ -437,7 +470,8 @@ std::vector<StoredRealization> read_journal_realizations(const fs::path& store) 
     return out;
 }
 
-Snapshot write_snapshot(const fs::path& store, const fs::path& out) {
+Snapshot write_snapshot(const fs::path& store, const fs::path& out,
+                        const PointParameters& point_parameters) {
     const h5::QuietErrors quiet;
     const fs::path src = journal_path(store);
     const fs::path dst = journal_path(out);
@@ -475,7 +509,7 @@ Snapshot write_snapshot(const fs::path& store, const fs::path& out) {
         scan, JournalOptions{.require_lock = false, .before_link = {}});
     const std::uint64_t token = random_token();
     const std::uint64_t at = journal.size();
-    write_from_journal(dst, at, out, dst.filename().string(), token, at);
+    write_from_journal(dst, at, out, dst.filename().string(), token, at, point_parameters);
     fsync_path(out);
     journal.append(
         RecordType::sync,

@@ -2,6 +2,9 @@
 // (realization rows buffered and flushed together, the small tables rewritten when they change).
 
 #include <algorithm>
+#include <map>
+#include <type_traits>
+#include <variant>
 
 #include "hopper/core/error.hpp"
 #include "layout.hpp"
@@ -55,7 +58,8 @@ struct Writer::Impl {
     std::vector<Buffer> failure_buf;
     std::int64_t failures_written = 0;
 
-    bool plan_dirty = true;  // /points and all of /tasks
+    PointParameters parameters;  // /points/parameters (none when empty)
+    bool plan_dirty = true;      // /points and all of /tasks
     bool runs_dirty = true;
     std::vector<std::pair<int, int>> changed_tasks;  // (point, realization)
     bool marked_open = false;
@@ -201,6 +205,7 @@ struct Writer::Impl {
             std::get<std::vector<std::int32_t>>(pb[6]).push_back(p.realizations());
         }
         write_table(points, pb, "points");
+        write_point_parameters(s);
         auto tb = buffers(tasks_columns());
         for (std::size_t p = 0; p < s.plan.points.size(); ++p) {
             const int planned = s.plan.points[p].realizations();
@@ -217,6 +222,50 @@ struct Writer::Impl {
             }
         }
         write_table(tasks, tb, "tasks");
+    }
+
+    // /points/parameters: one compound dataset, a record per point (its row in /points) with a
+    // typed member per scene parameter, rewritten whole with /points (the plan changes once per
+    // run at most). Members' units and descriptions are attributes, one element per member
+    // (docs/store.md). A file without it (written without parameters, or by a version before
+    // them) gets it at the next change of the plan.
+    void write_point_parameters(const State& s) {
+        if (!parameters) return;
+        if (h5::exists(g_points, "parameters"))
+            h5::remove(g_points, "parameters", "/points/parameters");
+        const std::vector<DerivedDataset> columns = parameters(s.plan, s.runs);
+        std::vector<h5::RecordField> fields;
+        std::vector<std::string> units, descriptions;
+        std::map<std::string, std::vector<std::string>> extra;  // further attributes, by name
+        for (const auto& c : columns) {
+            h5::RecordField f{c.name};
+            std::visit(
+                [&f](const auto& v) {
+                    using T = std::decay_t<decltype(v)>;
+                    if constexpr (std::is_same_v<T, std::vector<double>>) f.f64 = &v;
+                    if constexpr (std::is_same_v<T, std::vector<std::int64_t>>) f.i64 = &v;
+                    if constexpr (std::is_same_v<T, std::vector<std::string>>) f.text = &v;
+                    if constexpr (std::is_same_v<T, std::vector<bool>>) f.flag = &v;
+                },
+                c.values);
+            fields.push_back(f);
+            const bool text = std::holds_alternative<std::vector<std::string>>(c.values);
+            units.push_back(text ? std::string() : c.units.empty() ? std::string("1") : c.units);
+            descriptions.push_back(c.description);
+            for (const auto& [k, v] : c.attributes)
+                extra[k].resize(columns.size());
+        }
+        for (std::size_t i = 0; i < columns.size(); ++i)
+            for (const auto& [k, v] : columns[i].attributes)
+                extra[k][i] = v;
+        h5::Id ds = h5::write_records(g_points, "parameters", fields, s.plan.points.size());
+        h5::set_attr(ds, "description",
+                     std::string("every scene parameter of each point (record: the point's row "
+                                 "in /points), typed, in SI; generated from the scene schema"));
+        h5::set_attr(ds, "units", units);
+        h5::set_attr(ds, "descriptions", descriptions);
+        for (const auto& [k, v] : extra)
+            h5::set_attr(ds, k, v);
     }
 
     void write_changed_tasks(const State& s) {
@@ -319,18 +368,21 @@ Writer::Writer(Writer&&) noexcept = default;
 Writer& Writer::operator=(Writer&&) noexcept = default;
 Writer::~Writer() = default;
 
-Writer Writer::create(const fs::path& path, const std::string& journal_name) {
+Writer Writer::create(const fs::path& path, const std::string& journal_name,
+                      PointParameters parameters) {
     auto impl = std::make_unique<Impl>();
     impl->path = path;
+    impl->parameters = std::move(parameters);
     impl->file = h5::create_file(path);
     impl->create_schema(journal_name);
     impl->open_handles();
     return Writer(std::move(impl));
 }
 
-Writer Writer::open(const fs::path& path) {
+Writer Writer::open(const fs::path& path, PointParameters parameters) {
     auto impl = std::make_unique<Impl>();
     impl->path = path;
+    impl->parameters = std::move(parameters);
     impl->file = h5::open_file(path, true);
     impl->open_handles();
     impl->plan_dirty = false;
@@ -341,6 +393,10 @@ Writer Writer::open(const fs::path& path) {
 void Writer::run_start(const State&, bool plan_changed) {
     if (plan_changed) impl_->plan_dirty = true;
     impl_->runs_dirty = true;
+}
+
+void Writer::allotment(const State&, bool plan_changed) {
+    if (plan_changed) impl_->plan_dirty = true;
 }
 
 void Writer::result(const State& s, int point, std::int64_t row, const ResultRecord& rec,

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """analysis/hopper_store.py against a real store (mini_fields.toml, run by store.sh): every table
 agrees with the raw datasets read with h5py and with the C++ analysis (/analysis/points), the
-settings come typed from the scene text, and the export writes the same rows.
+settings come typed from /points/parameters (and agree with the scene text), and the export
+writes the same rows.
 usage: test_hopper_store.py SOURCE_DIR STORE.h5 CSV_DIR"""
 import math
 import pathlib
@@ -27,7 +28,7 @@ def check(ok, what):
 f = h5py.File(store_path, "r")
 with open_store(store_path) as s:
     p = s.points
-    # settings typed, from the scene text
+    # settings typed, from /points/parameters
     check(p["material.mu"].dtype == np.float64 and (p["material.mu"] == 0.5).all(),
           "material.mu is float 0.5: %s" % p["material.mu"].tolist())
     check(p["particles.count"].dtype == np.int64 and (p["particles.count"] == 100).all(),
@@ -37,6 +38,26 @@ with open_store(store_path) as s:
     check(np.allclose(np.degrees(p["hopper.theta_rad"]), p["theta_deg"]), "theta_rad = theta_deg")
     check(list(p["label"]) == list(f["points/label"].asstr()[:]), "labels in /points order")
     check(s.varied == ["hopper.outlet_m", "hopper.theta_rad"], "varied: %s" % s.varied)
+    # the typed /points/parameters (issue 28): every line of each point's scene text (the
+    # fingerprint) has its member with the same value; the units are attributes, in SI
+    from hopper_store import parse_scene  # noqa: E402
+    rec = f["points/parameters"]
+    units = dict(zip(rec.dtype.names, [str(u) for u in rec.attrs["units"]]))
+    check(units["hopper.outlet_m"] == "m" and units["hopper.theta_rad"] == "rad"
+          and units["particles.density_kg_m3"] == "kg/m^3" and units["protocol.max_time_s"] == "s",
+          "units attributes: %r" % {k: units[k] for k in ("hopper.outlet_m", "hopper.theta_rad")})
+    sweep = dict(zip(rec.dtype.names, [str(u) for u in rec.attrs["sweep_name"]]))
+    check(sweep["hopper.outlet_m"] == "D_cm" and sweep["material.mu"] == "material.mu",
+          "sweep_name attributes")
+    check(bool(rec["typed"][:].all()), "every point typed")
+    for i, text in enumerate(f["points/scene"].asstr()[:]):
+        for name, v in parse_scene(text).items():
+            got = p.at[i, name]
+            same = (isinstance(v, str) and got == v) or (v is None and pd.isna(got)) or \
+                (v is not None and not isinstance(v, str) and float(got) == float(v))
+            check(same, "point %d: %s = %r in the scene text, %r typed" % (i, name, v, got))
+    check("has_protocol.t_check_s" in rec.dtype.names and p["protocol.t_check_s"].isna().all(),
+          "an unset optional: a has_ flag in the file, NaN in pandas")
     check(list(s.groups()) == ["\u03b8 = 45\u00b0", "\u03b8 = 60\u00b0"],
           "groups: %s" % list(s.groups()))
 

@@ -49,6 +49,18 @@ s.close()
 assert not os.path.exists(view), view  # the snapshot is removed by close()
 PY
 
+# hopper_store.readable(): scripts that read the HDF5 layout themselves (analysis/calibration.py)
+# get a snapshot's path during the run (before: h5py failed on the writer's file lock).
+HOPPER_CAMPAIGN=$EXE PYTHONPATH=$SRC/analysis "$PY" - "$STORE" "$stored" <<'PY' || fail "readable() during the run"
+import os, sys, h5py
+from hopper_store import readable
+with readable(sys.argv[1]) as path:
+    assert path != sys.argv[1], path
+    with h5py.File(path, "r") as f:
+        assert len(f["realizations/seed"]) == int(sys.argv[2]), len(f["realizations/seed"])
+assert not os.path.exists(path), path  # the snapshot is removed at the block's end
+PY
+
 if "$PY" -c 'import matplotlib' 2>/dev/null; then
     run_expect 0 plot "$EXE" plot "$STORE" --out plots
     expect_in plot.err "a \`campaign run\` is writing"

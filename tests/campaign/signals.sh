@@ -59,4 +59,36 @@ grep -qF "(0 interrupted)" job.err || { cat job.err >&2; fail "drain interrupted
 run_expect 0 rerun "${CMD[@]}"
 digest "$STORE" sig.digest
 same_digests "$WORK/ref.digest" sig.digest
+
+# 4. A drain that comes while the last realization runs, and which that realization outlives
+# (Slurm's warning signal at the very end of an allocation), stops nothing: the run is complete
+# (exit 0, end_reason "complete"), not "interrupted" with nothing to resume. One realization of
+# a few seconds (ckpt.toml's first point at delta 200, 4x its steps: about 4 s here), the signal
+# once it runs, a grace far longer than it.
+if [ "$NP" -eq 0 ]; then
+    sed -e 's/^realizations = .*/realizations = 1/' -e 's/^D_cm = .*/D_cm = [2.0]/' \
+        -e 's/^steps_per_collision = .*/steps_per_collision = 200/' \
+        "$SRC/tests/campaign/data/ckpt.toml" >"$WORK/last.toml"
+    : >job.err
+    start_job "$EXE" run "$WORK/last.toml" --store "$WORK/last.h5" --progress-interval 0 \
+        --grace 300 --threads 1
+    for _ in $(seq 100); do
+        [ -e "$WORK/last.h5.journal" ] && grep -qF "0 stored, 1 to run" job.err && break
+        sleep 0.05
+    done
+    sleep 0.5
+    kill -USR1 "$JOB"
+    wait "$JOB"
+    rc=$?
+    expect_in job.err "SIGUSR1: handing out no more tasks"
+    [ $rc -eq 0 ] || { cat job.err >&2; fail "a drain the last realization outlived: exit $rc, expected 0"; }
+    expect_in job.err "SIGUSR1 came after the last realization was handed out, and it finished"
+    "$EXE" status "$WORK/last.h5" --json >last.json || fail "status after the late drain"
+    "$PY" - last.json <<'PY' || fail "store after a drain the last realization outlived"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["done"] == s["total"] == 1 and s["pending"] == 0, s
+assert s["runs"][-1]["end_reason"] == "complete", s["runs"]
+PY
+fi
 echo "ok"

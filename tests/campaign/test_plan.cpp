@@ -163,12 +163,89 @@ TEST(Plan, CarriesTheTypedSettingsAndParametersAndTheJournalKeepsThem) {
     r.plan.points[1].settings.clear();
     r.plan.points[1].parameters.clear();
     store::Bytes old = store::encode(r);
-    old.resize(old.size() - 2 * 2 * 4);  // two empty lists (u32 0) per point
+    // Without the limits (plan format 2, issue 29: u32 format, i32 per point), then without the
+    // two empty lists (u32 0) per point.
+    old.resize(old.size() - (4 + 2 * 4) - 2 * 2 * 4);
     const store::RunStartRecord before = store::decode_run_start(old);
     ASSERT_EQ(before.plan.points.size(), 2u);
     EXPECT_TRUE(before.plan.points[1].settings.empty());
     EXPECT_TRUE(before.plan.points[1].parameters.empty());
     EXPECT_EQ(before.plan.points[1].seeds, p.seeds);
+    EXPECT_EQ(before.plan.points[1].limit, 3);  // every seed listed: the limit is their count
+}
+
+// Issue 29: a campaign with a target plans max_realizations per point, but its plan lists only
+// the first round's seeds and the limit; the run-start record is as small as a plain one's.
+TEST(Plan, TargetCampaignListsItsFirstRoundAndItsLimitNotMaxRealizations) {
+    const std::string target =
+        "target = \"tau\"\ntarget_rel_ci = 0.01\n"
+        "max_realizations = 1000000\nround_realizations = 2\n";
+    std::string text = sweep_text;
+    text.insert(text.find("[sweep]"), target);
+    const auto s = sweep("", text);
+    ASSERT_TRUE(s.campaign.target);
+    const auto plan = make_plan(s.campaign);
+    ASSERT_EQ(plan.points.size(), 2u);
+    for (std::size_t p = 0; p < 2; ++p) {
+        const store::PointPlan& pt = plan.points[p];
+        EXPECT_EQ(pt.realizations(), 3);  // the first round: the points' `realizations`
+        EXPECT_EQ(pt.limit, 1000000);
+        EXPECT_EQ(pt.max_realizations(), 1000000);
+        for (int r = 0; r < 3; ++r)
+            EXPECT_EQ(pt.seeds[static_cast<std::size_t>(r)],
+                      config::derive_seed(7, s.campaign.points[p].settings, r));
+    }
+    // The same first seeds as the campaign without a target.
+    EXPECT_EQ(plan.points[1].seeds, make_plan(sweep().campaign).points[1].seeds);
+    store::RunStartRecord r;
+    r.plan = plan;
+    const store::Bytes bytes = store::encode(r);
+    // About 3 kB per point of typed parameters; 2 x 10^6 seeds were 16 MB.
+    EXPECT_LT(bytes.size(), 16384u) << "the plan must not list max_realizations seeds";
+    const store::RunStartRecord back = store::decode_run_start(bytes);
+    EXPECT_EQ(back.plan.points[0].limit, 1000000);
+    EXPECT_EQ(back.plan.points[0].seeds, plan.points[0].seeds);
+    // The task list makes tasks on demand: ids as expand_tasks's, nothing built.
+    const config::TaskList tasks(s.campaign);
+    EXPECT_EQ(tasks.size(), 2000000);
+    const config::Task t = tasks.at(1000000 + 999999);
+    EXPECT_EQ(t.point_index, 1);
+    EXPECT_EQ(t.realization, 999999);
+    EXPECT_EQ(t.seed, config::derive_seed(7, s.campaign.points[1].settings, 999999));
+    EXPECT_EQ(tasks.at(1, 999999).task_id, 1999999);
+    EXPECT_THROW(tasks.at(2000000), std::out_of_range);
+    EXPECT_THROW(tasks.at(0, 1000000), std::out_of_range);
+    // Raising max_realizations extends the campaign (counted to the limits).
+    std::string fewer = text;
+    fewer.replace(fewer.find("1000000"), 7, "999995");
+    const auto notes = check_compatible(make_plan(sweep("", fewer).campaign), plan);
+    ASSERT_EQ(notes.size(), 1u);
+    EXPECT_EQ(notes[0], "the sweep extends the campaign: 0 new point(s), 10 new realization(s)");
+    EXPECT_TRUE(check_compatible(plan, plan).empty());
+}
+
+// The steady state's springs (round 3): a store whose steady-state points were written before
+// the fix (every re-insertion reset every tangential spring) has no protocol.reinsertion line
+// and is refused, naming the line and the fault; published-protocol points have no such line
+// and resume as before.
+TEST(Plan, SteadyStateStoresBeforeTheSpringFixAreRefused) {
+    std::string base = sweep_text;
+    base.replace(base.find("[protocol]"), 10, "[protocol]\nmode = \"steady_state\"");
+    const auto now = make_plan(sweep("", base).campaign);
+    ASSERT_FALSE(now.points.empty());
+    const std::string line = "protocol.reinsertion=keeps_springs\n";
+    EXPECT_NE(now.points[0].scene.find(line), std::string::npos) << now.points[0].scene;
+    EXPECT_EQ(make_plan(sweep().campaign).points[0].scene.find("protocol.reinsertion"),
+              std::string::npos);
+    auto before = now;  // the same points as a store written before the fix had them
+    for (auto& p : before.points)
+        p.scene.erase(p.scene.find(line), line.size());
+    const std::string msg = refusal(before, now);
+    EXPECT_NE(msg.find("protocol.reinsertion = keeps_springs (store: absent)"), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("every re-insertion reset every tangential spring"), std::string::npos)
+        << msg;
+    EXPECT_EQ(refusal(now, now), "(accepted)");
 }
 
 TEST(Plan, ExtensionIsAccepted) {

@@ -202,6 +202,19 @@ TEST(CampaignCli, SubmitDryRunWarnsWhenTheChainCannotFinish) {
     EXPECT_EQ(ok.err.find("warning: the chain"), std::string::npos) << ok.err;
 }
 
+// The dry run's point column cut labels at 40 characters: the head scan's points read
+// "D_cm=2.7 theta_deg=45 hopper.particles=3" for 300 disks (and would for 3000).
+TEST(CampaignCli, DryRunShowsWholeLabels) {
+    const fs::path heads = source_dir / "campaigns" / "open-question" / "head-scan.toml";
+    const Outcome r =
+        campaign("run " + quote(heads) + " --dry-run --store " + quote(scratch() / "h.h5"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* n : {"300", "500", "700", "1500"})
+        EXPECT_NE(r.out.find(std::string("D_cm=2.7 theta_deg=45 hopper.particles=") + n + " "),
+                  std::string::npos)
+            << r.out;
+}
+
 struct BadLine {
     std::string args;
     std::vector<std::string> mentions;  // the message must name these

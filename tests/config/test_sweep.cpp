@@ -572,6 +572,32 @@ D_cm = [2.7, 2.9]
     EXPECT_EQ(p.realizations, 1);
 }
 
+// A user stumble: "material.mu" = [...] is one quoted TOML key; it was refused with "did you
+// mean 'material.mu'?". It now means exactly what the unquoted dotted key means.
+TEST(SweepParse, AQuotedDottedKeyMeansTheSameAsTheDottedKey) {
+    const std::string tail = R"(
+[[points]]
+D_cm = 3.0
+"walls.mu" = 0.3
+)";
+    const SweepFile quoted =
+        parse(campaign_head + "[sweep]\n\"material.collision_time_s\" = [8e-4, 4e-4]\n" + tail);
+    const SweepFile plain =
+        parse(campaign_head + "[sweep]\nmaterial.collision_time_s = [8e-4, 4e-4]\n" + tail);
+    ASSERT_EQ(labels(quoted.campaign).size(), 3u);  // the sweep's two and the point
+    EXPECT_EQ(labels(quoted.campaign), labels(plain.campaign));
+    EXPECT_EQ(labels(quoted.campaign)[1], "D_cm=2.7 theta_deg=45 material.collision_time_s=4e-04");
+    EXPECT_EQ(labels(quoted.campaign)[2], "D_cm=3 theta_deg=45 walls.mu=0.3");
+    ASSERT_TRUE(quoted.campaign.points[1].scene.material.collision_time.has_value());
+    EXPECT_DOUBLE_EQ(*quoted.campaign.points[1].scene.material.collision_time, 4e-4);
+    EXPECT_DOUBLE_EQ(quoted.campaign.points[2].scene.material.wall.mu, 0.3);
+    EXPECT_EQ(quoted.campaign.points[0].scene.hopper.outlet,
+              plain.campaign.points[0].scene.hopper.outlet);
+    // a quoted name that is no key is refused as before
+    EXPECT_THAT(error_of(campaign_head + "[sweep]\n\"material.muu\" = [0.5]\n"),
+                HasSubstr("unknown key 'material.muu' in [sweep]"));
+}
+
 TEST(SweepParse, OtherNamesAreSortedAndStringsAndIntegersPrintCanonically) {
     const SweepFile s = parse(campaign_head + R"(
 [sweep]

@@ -14,6 +14,18 @@ namespace {
 using namespace hopper::engine;
 using namespace hopper::engine::testing;
 
+// A box open at the top, of inner width W and wall height H: floor and side walls of wall disks
+// of d_large at a centre spacing of 0.5 d_large, the inner floor at y = 0 from x = 0 to W.
+void add_open_box(System& s, double W, double H) {
+    const double dw = d_large;
+    for (double x = -0.5 * dw; x <= W + 0.5 * dw + 1e-12; x += 0.5 * dw)
+        s.add_wall(Vec2(x, -0.5 * dw), dw);
+    for (double y = 0.0; y <= H; y += 0.5 * dw) {
+        s.add_wall(Vec2(-0.5 * dw, y), dw);
+        s.add_wall(Vec2(W + 0.5 * dw, y), dw);
+    }
+}
+
 // A box open at the top: floor and two side walls of wall disks (d_large, centre spacing
 // 0.5 d_large), inner width W = 20 d_large; 300 bidisperse disks (62 % small) dropped from a
 // lattice (spacing 1.05 d_large) with small random velocities, damped (e_n = 0.5, mu = 0.5),
@@ -29,13 +41,8 @@ TEST(SettledColumn, WallsCarryTheWholeWeight) {
     for (Scheme scheme : {Scheme::verlet, Scheme::gear4}) {
         const ContactParams cp = contact_params(0.5, 0.5);
         System s(system_config(scheme, 50.0, cp, cp));
-        const double dw = d_large, W = 20.0 * d_large, H = 45.0 * d_large;
-        for (double x = -0.5 * dw; x <= W + 0.5 * dw + 1e-12; x += 0.5 * dw)
-            s.add_wall(Vec2(x, -0.5 * dw), dw);
-        for (double y = 0.0; y <= H; y += 0.5 * dw) {
-            s.add_wall(Vec2(-0.5 * dw, y), dw);
-            s.add_wall(Vec2(W + 0.5 * dw, y), dw);
-        }
+        const double W = 20.0 * d_large, H = 45.0 * d_large;
+        add_open_box(s, W, H);
         std::mt19937_64 gen(2024);
         std::uniform_real_distribution<double> U(0.0, 1.0);
         const double a = 1.05 * d_large;
@@ -267,13 +274,8 @@ TEST(Springs, SurviveTheAdditionOfAParticle) {
         SCOPED_TRACE(scheme == Scheme::verlet ? "verlet" : "gear4");
         const ContactParams cp = contact_params(0.5, 0.5);
         System s(system_config(scheme, 50.0, cp, cp));
-        const double dw = d_large, W = 12.0 * d_large, H = 60.0 * d_large;
-        for (double x = -0.5 * dw; x <= W + 0.5 * dw + 1e-12; x += 0.5 * dw)
-            s.add_wall(Vec2(x, -0.5 * dw), dw);
-        for (double y = 0.0; y <= H; y += 0.5 * dw) {
-            s.add_wall(Vec2(-0.5 * dw, y), dw);
-            s.add_wall(Vec2(W + 0.5 * dw, y), dw);
-        }
+        const double W = 12.0 * d_large, H = 60.0 * d_large;
+        add_open_box(s, W, H);
         std::mt19937_64 gen(7);
         std::uniform_real_distribution<double> U(0.0, 1.0);
         const double a = 1.05 * d_large;

@@ -251,6 +251,68 @@ TEST(Store, ResumeExtendsThePlanAndKeepsEverything) {
     EXPECT_EQ(read_realizations(p).size(), 6u);
 }
 
+// Issue 29: a target campaign's plan lists its first round and its limit; each round's
+// allotment record extends it, so the journal and the plan grow with the rounds, never to the
+// limit, and a round recorded again (a resume) writes nothing.
+TEST(Store, AllotmentsGrowThePlanRoundByRoundNotToItsLimit) {
+    const fs::path p = scratch() / "s.h5";
+    const PointPlan all = point("D_cm=3 theta_deg=60", 1000);
+    PointPlan first = all;
+    first.seeds.resize(2);
+    first.limit = 1000000;
+    const auto seeds = [&](int from, int to) {
+        return std::vector<std::uint64_t>(all.seeds.begin() + from, all.seeds.begin() + to);
+    };
+    {
+        Store s(p);
+        s.begin_run(run_record({first}));
+        EXPECT_LT(fs::file_size(journal_path(p)), 1000u) << "the plan lists no limit's seeds";
+        s.append(result_record(all, 0, fabricated(0)));
+        s.append(result_record(all, 1, fabricated(1)));
+        const AllotmentRecord round2{{PointAllotment{all.label, 0, seeds(0, 4)}}};
+        s.allot(round2);
+        const auto after_round = fs::file_size(journal_path(p));
+        s.allot(round2);  // again: nothing new
+        s.allot(AllotmentRecord{{PointAllotment{all.label, 2, seeds(2, 3)}}});  // inside it
+        EXPECT_EQ(fs::file_size(journal_path(p)), after_round);
+        EXPECT_EQ(s.plan().points[0].realizations(), 4);
+        EXPECT_EQ(s.plan().points[0].limit, 1000000);
+        const StoreStatus st = s.status();
+        EXPECT_EQ(st.points[0].planned, 4);
+        EXPECT_EQ(st.points[0].limit, 1000000);
+        EXPECT_EQ(st.pending, 2);
+        EXPECT_TRUE(
+            contains(message_of([&] {
+                         s.allot(AllotmentRecord{{PointAllotment{all.label, 5, seeds(5, 6)}}});
+                     }),
+                     "leaves a gap"));
+        s.append(result_record(all, 2, fabricated(2)));
+        s.end_run(RunEndRecord{utc_now(), "interrupted by SIGTERM", 3, 1.0, 0.01});
+    }
+    // Replayed from the journal: the same plan and counts; a resume's first-round plan does not
+    // shrink it.
+    StoreStatus st = read_status(p);
+    ASSERT_EQ(st.plan.points.size(), 1u);
+    EXPECT_EQ(st.plan.points[0].seeds, seeds(0, 4));
+    EXPECT_EQ(st.plan.points[0].limit, 1000000);
+    EXPECT_EQ(st.total, 4);
+    EXPECT_EQ(st.done + st.failed, 3);
+    EXPECT_EQ(st.pending, 1);
+    {
+        Store s(p);
+        s.begin_run(run_record({first}));
+        EXPECT_EQ(s.plan().points[0].realizations(), 4);
+        s.allot(AllotmentRecord{{PointAllotment{all.label, 4, seeds(4, 6)}}});
+        s.append(result_record(all, 5, fabricated(5)));
+        s.end_run(RunEndRecord{utc_now(), "complete", 1, 1.0, 0.01});
+    }
+    st = read_status(p);
+    EXPECT_EQ(st.plan.points[0].seeds, seeds(0, 6));
+    EXPECT_EQ(st.points[0].planned, 6);
+    EXPECT_EQ(contents(read_realizations(p)), contents(read_journal_realizations(p)));
+    EXPECT_LT(fs::file_size(journal_path(p)), 20000u);
+}
+
 TEST(Store, StatusWorksWhileARunWrites) {
     const fs::path p = scratch() / "s.h5";
     Store s(p);
@@ -313,7 +375,7 @@ TEST(Store, ASnapshotNeedsTheJournal) {
 TEST(Store, WriterThatNeverClosedIsRebuiltFromTheJournal) {
     const fs::path p = scratch() / "s.h5";
     {
-        Store s(p, StoreOptions{0.0, "", 0, true, {}});
+        Store s(p, StoreOptions{0.0, "", 0, true, {}, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 0, fabricated(0)));
         s.append(result_record(B, 1, fabricated(1)));
@@ -500,7 +562,7 @@ TEST_P(CrashPoint, KilledWriterLosesNothingCountedAsDone) {
     }
     if (std::string(where) == "rebuild") fs::remove(p);  // force a rebuild in the child
     ASSERT_TRUE(dies_of_sigkill([&, where = where, n = n] {
-        Store s(p, StoreOptions{0.0, where, n, true, {}});
+        Store s(p, StoreOptions{0.0, where, n, true, {}, {}});
         s.begin_run(run_record({A, B}));
         s.append(result_record(A, 1, fabricated(1)));
         s.append(result_record(A, 2, fabricated(2)));

@@ -85,6 +85,9 @@ struct MasterReport {
     int silent_at_end = 0;   // workers still silent when the run ended
     bool stopped = false;
     std::string stop_reason;
+    // A stop was sent to running realizations (SIGTERM, a second signal, the end of a drain's
+    // grace or the deadline), whether or not they ended before it reached them.
+    bool stopped_running = false;
     // Set when the run stopped handing out tasks because of identical early failures
     // (MasterOptions::fail_fast_after): what failed, and how.
     std::string fail_fast;

@@ -19,8 +19,19 @@ namespace hopper::campaign {
 // Two scenes give the same text exactly when they give the same physics.
 std::string scene_text(const engine::SceneParams& p);
 
-// The store's view of the campaign: every point with its label, physics text and seeds.
+// The store's view of the campaign: every point with its label, physics text, limit and the
+// seeds of its first allotment (first_allotment).
 store::CampaignPlan make_plan(const config::CampaignSpec& spec);
+
+// The realizations a point is allotted before anything is stored: all of them, or with a target
+// its first round (its `realizations`, at most max_realizations).
+int first_allotment(const config::CampaignSpec& spec, const config::Point& point);
+
+// What a resumed run records as its plan (issue 29): the points of `sweep` that `stored` lacks
+// or that they extend (more seeds listed, a higher limit), whole; the points already stored as
+// they are left out, so that a resume of 10^5 points does not write the plan again. The union of
+// the plans (store::State) is the same.
+store::CampaignPlan plan_additions(const store::CampaignPlan& stored, store::CampaignPlan sweep);
 
 // Gives the points recorded before typed settings existed (empty `settings`/`parameters`) theirs,
 // from the sweep texts the runs recorded (newest first; RunInfo::sweep_text): a point takes them

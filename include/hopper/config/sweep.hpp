@@ -96,6 +96,28 @@ struct Task {
 // settings and its realization index, so adding points or realizations never changes it.
 std::vector<Task> expand_tasks(const CampaignSpec& spec);
 
+// The same list without building it (issue 29: a campaign with a target plans max_realizations
+// per point, of which a round runs a few): the ids are expand_tasks's (the points' realizations
+// in order), each task made when asked for. Memory: one offset and the settings per point.
+class TaskList {
+  public:
+    TaskList() = default;
+    explicit TaskList(const CampaignSpec& spec);
+    int size() const { return offset_.empty() ? 0 : static_cast<int>(offset_.back()); }
+    int points() const { return static_cast<int>(settings_.size()); }
+    // Realizations of point `point` (its `realizations`, max_realizations with a target).
+    int realizations(int point) const;
+    // Throws std::out_of_range for an id not in the list.
+    Task at(int task_id) const;
+    // Throws std::out_of_range for a realization the point does not plan.
+    Task at(int point, int realization) const;
+
+  private:
+    std::uint64_t seed_ = 0;
+    std::vector<std::vector<core::Setting>> settings_;
+    std::vector<long long> offset_;  // the first id of each point, then the total
+};
+
 // Seed of realization `realization` of a point with the given settings.
 std::uint64_t derive_seed(std::uint64_t campaign_seed, const std::vector<core::Setting>& settings,
                           int realization);

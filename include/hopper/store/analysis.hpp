@@ -34,6 +34,8 @@ struct DerivedDataset {
     // Empty: 1-D (extendible). Otherwise the dimensions, row-major; their product must be the
     // number of values (not for strings).
     std::vector<std::uint64_t> shape = {};
+    // Further string attributes of the dataset (beside description and units).
+    std::vector<std::pair<std::string, std::string>> attributes = {};
 };
 
 struct DerivedGroup {

@@ -25,6 +25,7 @@ enum class RecordType : std::uint8_t {
     error = 3,      // ErrorRecord
     run_end = 4,    // RunEndRecord
     sync = 5,       // SyncRecord
+    allotment = 6,  // AllotmentRecord (issue 29: a target campaign's plan grows by rounds)
 };
 
 inline constexpr std::size_t journal_header_size = 16;

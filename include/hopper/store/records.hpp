@@ -4,6 +4,7 @@
 // that the HDF5 file was closed in step with the journal. Each is one journal record
 // (journal.hpp); the HDF5 file (store.hpp) is built from them.
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -28,7 +29,13 @@ struct PointPlan {
     double D_cm = 0.0;
     double theta_deg = 0.0;
     int particles = 0;
-    std::vector<std::uint64_t> seeds;  // realization r -> its seed; size = planned realizations
+    // Realization r -> its seed, for the realizations allotted so far: all of them in a campaign
+    // without a target; with one, those of the rounds decided so far (AllotmentRecord extends
+    // the list round by round), so that the plan costs what is planned, not max_realizations.
+    std::vector<std::uint64_t> seeds;
+    // The most realizations the point may have: max_realizations with a target, else its
+    // realizations. Read as seeds.size() from plans recorded before it (issue 29).
+    int limit = 0;
     // Typed settings (core/setting.hpp). `settings`: what the label shows (the point's varied
     // settings, canonical order); `parameters`: every scene parameter under its sweep-file name
     // and unit. Empty when read from a journal written before they were recorded (the campaign
@@ -36,7 +43,9 @@ struct PointPlan {
     std::vector<core::Setting> settings;
     std::vector<core::Setting> parameters;
     std::uint64_t physics_hash() const { return fnv1a64(scene); }
+    // Realizations allotted so far (the current round's end with a target).
     int realizations() const { return static_cast<int>(seeds.size()); }
+    int max_realizations() const { return std::max(limit, realizations()); }
 };
 
 struct CampaignPlan {
@@ -46,6 +55,20 @@ struct CampaignPlan {
     // Hash of the campaign seed and every point's (label, physics), independent of point order.
     std::uint64_t physics_hash() const;
     const PointPlan* find(const std::string& label) const;
+};
+
+// A campaign with a target extends its points' allotments round by round (campaign/adaptive.hpp):
+// the master records each extension before it hands out the round's realizations. For each point
+// whose allotment grows: the seeds of realizations [first, first + seeds.size()). Replaying the
+// rounds from the stored results gives the same allotments, so the record is bookkeeping for
+// readers (status, the /tasks table), never a decision.
+struct PointAllotment {
+    std::string label;
+    int first = 0;
+    std::vector<std::uint64_t> seeds;
+};
+struct AllotmentRecord {
+    std::vector<PointAllotment> points;
 };
 
 // Provenance of one `campaign run` (one allocation, one resume).
@@ -128,11 +151,13 @@ Bytes encode(const ResultRecord& r);
 Bytes encode(const ErrorRecord& r);
 Bytes encode(const RunEndRecord& r);
 Bytes encode(const SyncRecord& r);
+Bytes encode(const AllotmentRecord& r);
 RunStartRecord decode_run_start(std::span<const std::uint8_t> b);
 ResultRecord decode_result_record(std::span<const std::uint8_t> b);
 ErrorRecord decode_error(std::span<const std::uint8_t> b);
 RunEndRecord decode_run_end(std::span<const std::uint8_t> b);
 SyncRecord decode_sync(std::span<const std::uint8_t> b);
+AllotmentRecord decode_allotment(std::span<const std::uint8_t> b);
 
 // The current time as ISO 8601 UTC ("2024-05-01T12:00:00Z") and as seconds since 1970.
 std::string utc_now();

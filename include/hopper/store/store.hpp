@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "hopper/engine/result.hpp"
+#include "hopper/store/analysis.hpp"
 #include "hopper/store/records.hpp"
 
 namespace hopper::store {
@@ -63,7 +64,8 @@ struct TaskEntry {
 
 struct PointStatus {
     std::string label;
-    int planned = 0;
+    int planned = 0;  // allotted so far (a target campaign: to the end of its current round)
+    int limit = 0;    // the most it may have (max_realizations with a target, else planned)
     int done = 0;
     int failed = 0;  // failed results plus tasks in error
     int errors = 0;  // of which in error (retried by the next run)
@@ -140,7 +142,15 @@ struct Snapshot {
     std::uint64_t journal_bytes = 0;  // the journal's length it was taken at
     bool writer_active = false;       // a `campaign run` held the store when it was taken
 };
-Snapshot write_snapshot(const std::filesystem::path& store, const std::filesystem::path& out);
+// The typed columns of /points/parameters (docs/store.md): one dataset per scene parameter, one
+// value per point of the plan, with its units. The store does not know the scene's parameters:
+// the layer that does gives them (campaign::point_parameter_columns, from the scene schema);
+// the runs are there for points recorded before typed parameters. Empty: no such group.
+using PointParameters = std::function<std::vector<DerivedDataset>(
+    const CampaignPlan& plan, const std::vector<RunSummary>& runs)>;
+
+Snapshot write_snapshot(const std::filesystem::path& store, const std::filesystem::path& out,
+                        const PointParameters& point_parameters = {});
 
 struct StoreOptions {
     // Seconds between HDF5 flushes while running (0: after every result). The journal is
@@ -157,6 +167,8 @@ struct StoreOptions {
     // Test hook: called when a new journal is complete under its private name, before it is
     // linked into place (tests pause here to make two runs race for a new store).
     std::function<void()> before_journal_link;
+    // The typed /points/parameters columns (see PointParameters); empty: not written.
+    PointParameters point_parameters;
 };
 
 // The master's handle. Opening takes the journal's lock (one writer at a time), scans the
@@ -181,7 +193,10 @@ class Store {
     // Records a run and its plan (the caller has checked that the plan's physics agrees with
     // plan()); extends the store's plan with new points and realizations. Brings the HDF5 file
     // in step (rebuilding it from the journal when needed) and opens it for writing.
-    void begin_run(const RunStartRecord& run);
+    void begin_run(RunStartRecord run);
+    // Records the realizations a target campaign's next round allots (only the points whose
+    // allotment grows; nothing when none does), before they are handed out.
+    void allot(const AllotmentRecord& r);
     // Durable (journal fsync) when it returns; the HDF5 file follows within flush_interval.
     void append(const ResultRecord& r);
     void append(const ErrorRecord& r);

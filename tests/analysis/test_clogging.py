@@ -1,0 +1,74 @@
+#!/usr/bin/python3
+"""analysis/clogging.py arrests on a synthetic store (hopper_store.Store.from_frames) whose
+answers are known by hand (issue 23): arrests counted by status, tau (censored mean: flow time /
+jams) and jams per realization by group, and tau per interval after an ordinary shake and after
+a grown one, the comparison that does not select realizations by their number of jams.
+
+usage: test_clogging.py SOURCE_DIR     (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
+"""
+import math
+import os
+import sys
+
+try:
+    import pandas as pd
+    import scipy  # noqa: F401
+except ImportError:
+    sys.exit(77)
+
+SRC = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+sys.path.insert(0, os.path.join(SRC, "analysis"))
+import clogging  # noqa: E402
+from hopper_store import Store  # noqa: E402
+
+failures = []
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+        print("FAIL: " + what)
+
+
+# Realization 0: two jams, each cleared by one shake; intervals 2 s, 3 s, then 5 s censored.
+# Realization 1: three jams, the second needing 3 shakes; intervals 1, 4, 2 s, then 6 s censored.
+# Realization 2: arrested after its only jam (10 shakes): one interval of 7 s.
+realizations = pd.DataFrame({"point": [0, 0, 0], "realization": [0, 1, 2],
+                             "status": ["complete", "complete", "arrested"],
+                             "n_jams": [2, 3, 1]})
+rows = [(0, 0, 0, 2.0, 1), (0, 0, 1, 3.0, 1), (0, 0, 2, 5.0, 0),
+        (0, 1, 0, 1.0, 1), (0, 1, 1, 4.0, 1), (0, 1, 2, 2.0, 1), (0, 1, 3, 6.0, 0),
+        (0, 2, 0, 7.0, 1)]
+survival = pd.DataFrame(rows, columns=["point", "realization", "interval", "duration", "event"])
+jams = pd.DataFrame({"point": [0] * 6, "realization": [0, 0, 1, 1, 1, 2],
+                     "shakes": [1, 1, 1, 3, 1, 10]})
+store = Store.from_frames("synthetic", {"realizations": realizations, "survival": survival,
+                                        "jams": jams, "arches": pd.DataFrame(),
+                                        "points": pd.DataFrame()})
+r = clogging.arrest_summary(store, "synthetic")
+
+check(r["by_status"] == {"complete": 2, "arrested": 1}, "statuses: %s" % r["by_status"])
+check(r["shakes_needed"] == {1: 4, 3: 1, 10: 1}, "shakes per jam: %s" % r["shakes_needed"])
+g = r["groups"]
+# all: 30 s of flow, 6 jams -> 5.0 s; no grown shake: realization 0 alone, 10 s / 2 jams -> 5.0;
+# grown shake: realizations 1 and 2, 20 s / 4 jams -> 5.0.
+check(abs(g["all"]["tau"]["mean"] - 30.0 / 6) < 1e-12, "tau of all: %s" % g["all"]["tau"])
+check(g["all"]["arrested"] == 1, "one arrested")
+check(g["no grown shake"]["realizations"] == 1 and g["grown shake"]["realizations"] == 2,
+      "groups by realization: %s" % {k: v["realizations"] for k, v in g.items()})
+check(abs(g["grown shake"]["jams_per_realization"] - 2.0) < 1e-12, "jams per grown realization")
+# Per interval: after one shake, intervals (r0, 1) 3 s, (r0, 2) 5 s censored, (r1, 1) 4 s,
+# (r1, 3) 6 s censored -> 18 s / 2 jams = 9.0 s; after a grown shake, (r1, 2) 2 s -> 2.0 s.
+# The arrested realization's jam restarted nothing, so no interval follows it.
+iv = r["intervals"]
+check(iv["after one shake"]["intervals"] == 4 and
+      abs(iv["after one shake"]["tau"]["mean"] - 9.0) < 1e-12,
+      "tau after one shake: %s" % iv.get("after one shake"))
+check(iv["after a grown shake"]["intervals"] == 1 and
+      abs(iv["after a grown shake"]["tau"]["mean"] - 2.0) < 1e-12,
+      "tau after a grown shake: %s" % iv.get("after a grown shake"))
+se = math.hypot(iv["after one shake"]["tau"]["se"], iv["after a grown shake"]["tau"]["se"])
+check(abs(r["z_tau_after_shake"] - (2.0 - 9.0) / se) < 1e-9, "z per interval")
+
+print("clogging: %d failed" % len(failures))
+sys.exit(1 if failures else 0)
