@@ -1,0 +1,121 @@
+#!/usr/bin/python3
+"""Side by side: the statistics of two engine builds from bench_engine_change (issue 25, part 2).
+
+    bench/engine_change_compare.py OLD.jsonl NEW.jsonl [--md FILE]
+
+Each file holds the JSON lines of bench_engine_change runs (any scenes and settings, one build).
+Per scene and setting, the table gives each observable's mean and standard error for both
+builds and z = (new - old) / sqrt(se_old^2 + se_new^2):
+  phi         settled packing fraction (every scene)
+  rate        steady discharge rate, disks/s (discharge scene)
+  jams        jams per realization (jamming scene)
+  tau         mean survival time, the censored maximum-likelihood mean: flowing time / jams;
+              its z compares ln tau, whose standard error is 1/sqrt(jams)
+  cpu         CPU seconds per realization (cost, not a statistic to agree: ratio new/old)
+Exit status 1 when a realization did not complete, when the seeds of the two files differ, or
+when |z| > 3 anywhere (a difference the errors do not explain); 0 otherwise.
+"""
+import argparse
+import json
+import math
+import sys
+
+
+def load(path):
+    rows = {}
+    with open(path) as f:
+        for n, line in enumerate(f, 1):
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                r = json.loads(line)
+            except json.JSONDecodeError as e:
+                sys.exit(f"{path}:{n}: not a JSON line ({e})")
+            rows.setdefault((r["scene"], r["setting"]), []).append(r)
+    return rows
+
+
+def mean_se(v):
+    v = [x for x in v if x is not None]
+    n = len(v)
+    if n == 0:
+        return float("nan"), float("nan"), 0
+    m = sum(v) / n
+    se = math.sqrt(sum((x - m) ** 2 for x in v) / (n - 1) / n) if n > 1 else float("nan")
+    return m, se, n
+
+
+def z_of(a, sa, b, sb):
+    s = math.hypot(sa, sb)
+    return (b - a) / s if s > 0 else float("nan")
+
+
+def fmt(m, se, digits):
+    return f"{m:.{digits}f} +- {se:.{digits}f}"
+
+
+def compare(old, new):
+    lines, worst, bad = [], 0.0, []
+    lines.append("| scene | setting | observable | old (mean +- se) | new (mean +- se) | n old / new | z |")
+    lines.append("|---|---|---|---|---|---|---|")
+    for key in sorted(set(old) | set(new)):
+        a, b = old.get(key, []), new.get(key, [])
+        if not a or not b:
+            bad.append(f"{key[0]} {key[1]}: only in {'old' if a else 'new'}")
+            continue
+        sa, sb = sorted(r["seed"] for r in a), sorted(r["seed"] for r in b)
+        if sa != sb:
+            bad.append(f"{key[0]} {key[1]}: the two builds ran different seeds")
+        for side, rows in (("old", a), ("new", b)):
+            for r in rows:
+                if r["status"] != "complete":
+                    bad.append(f"{key[0]} {key[1]} {side} seed {r['seed']}: {r['status']}")
+        obs = [("phi", 4)]
+        if key[0] == "discharge":
+            obs.append(("rate", 1))
+        else:
+            obs.append(("jams", 2))
+        for name, digits in obs:
+            ma, ea, na = mean_se([r[name] for r in a])
+            mb, eb, nb = mean_se([r[name] for r in b])
+            z = z_of(ma, ea, mb, eb)
+            worst = max(worst, abs(z)) if not math.isnan(z) else worst
+            lines.append(f"| {key[0]} | {key[1]} | {name} | {fmt(ma, ea, digits)} | "
+                         f"{fmt(mb, eb, digits)} | {na} / {nb} | {z:+.2f} |")
+        if key[0] == "jamming":
+            ja, jb = sum(r["jams"] for r in a), sum(r["jams"] for r in b)
+            fa, fb = sum(r["flow_time"] for r in a), sum(r["flow_time"] for r in b)
+            if ja and jb:
+                ta, tb = fa / ja, fb / jb
+                z = (math.log(tb) - math.log(ta)) / math.sqrt(1 / ja + 1 / jb)
+                worst = max(worst, abs(z))
+                lines.append(f"| {key[0]} | {key[1]} | tau (s) | {ta:.3f} +- {ta / math.sqrt(ja):.3f} "
+                             f"({ja} jams) | {tb:.3f} +- {tb / math.sqrt(jb):.3f} ({jb} jams) | "
+                             f"{len(a)} / {len(b)} | {z:+.2f} |")
+        ca, cb = sum(r["cpu_s"] for r in a), sum(r["cpu_s"] for r in b)
+        lines.append(f"| {key[0]} | {key[1]} | cpu s per realization | {ca / len(a):.2f} | "
+                     f"{cb / len(b):.2f} | {len(a)} / {len(b)} | new/old {cb / ca * len(a) / len(b):.2f} |")
+    return lines, worst, bad
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("old")
+    ap.add_argument("new")
+    ap.add_argument("--md", help="also write the table to this file")
+    args = ap.parse_args()
+    lines, worst, bad = compare(load(args.old), load(args.new))
+    text = "\n".join(lines) + f"\n\nlargest |z|: {worst:.2f}\n"
+    print(text, end="")
+    if args.md:
+        with open(args.md, "w") as f:
+            f.write(text)
+    for b in bad:
+        print("problem:", b, file=sys.stderr)
+    if bad or worst > 3.0:
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
