@@ -20,6 +20,7 @@
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/point_columns.hpp"
 #include "hopper/campaign/report.hpp"
+#include "hopper/campaign/run_end.hpp"
 #include "hopper/campaign/running.hpp"
 #include "hopper/campaign/signals.hpp"
 #include "hopper/campaign/worker.hpp"
@@ -402,90 +403,14 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 
-    int left = 0, failed = 0;
-    {
-        const auto have = allotments(st);  // the rounds may have grown them
-        for (std::size_t p = 0; p < spec.points.size(); ++p) {
-            const auto it = have.find(spec.points[p].label);
-            const int n = std::min(c.tasks.realizations(static_cast<int>(p)),
-                                   it == have.end() ? 0 : it->second);
-            for (int r = 0; r < n; ++r) {
-                const store::TaskEntry* e = st.task(spec.points[p].label, r);
-                const store::TaskState s = e ? e->state : store::TaskState::pending;
-                if (s == store::TaskState::pending) ++left;
-                if (s == store::TaskState::failed || s == store::TaskState::error) ++failed;
-            }
-        }
-    }
-    // A drain that the last realization outlived stopped nothing: complete. A stop sent to running
-    // realizations stays a stop, and so does any with a target (its rounds decide what is due).
-    const bool stopped =
-        rep.stopped && !(left == 0 && rep.interrupted == 0 && !spec.target && !rep.stopped_running);
-    if (rep.stopped && !stopped)
-        err << "campaign: " << rep.stop_reason << " came after the last realization was handed "
-            << "out, and it finished: the run is complete" << std::endl;
-    const std::string reason = stopped                  ? "interrupted by " + rep.stop_reason
-                               : !rep.fail_fast.empty() ? "stopped early: " + rep.fail_fast
-                                                        : std::string("complete");
-    st.end_run(store::RunEndRecord{store::utc_now(), reason, rep.stored, rep.wall_seconds,
-                                   rep.cpu_seconds, rep.lost_worker_seconds,
-                                   rep.saved_worker_seconds});
-
-    const store::StoreStatus status = st.status();
-    std::vector<std::string> labels;
-    for (const auto& p : spec.points)
-        labels.push_back(p.label);
-    write_summary(out, status, labels);
-    out.flush();
-
-    char share[64];
-    std::snprintf(share, sizeof share, "%.2f%%",
-                  rep.wall_seconds > 0 ? 100.0 * rep.cpu_seconds / rep.wall_seconds : 0.0);
-    err << "campaign: this run stored " << rep.stored << " realization(s) in "
-        << format_duration(rep.wall_seconds) << "; master CPU " << share << " of wall time"
-        << std::endl;
-    if (rep.reassigned > 0)
-        err << "campaign: " << rep.reassigned << " realization(s) were handed to another worker "
-            << "after their worker went silent; late results: " << rep.late_identical
-            << " identical, " << rep.late_different << " different" << std::endl;
     const std::string resume =
         !opt.resume_command.empty()
             ? opt.resume_command
             : "campaign run " + c.sweep.path.string() +
                   (opt.store ? " --store " + opt.store->string() : std::string());
-    if (rep.interrupted > 0 || rep.resumed > 0)
-        err << "campaign: worker time of interrupted realizations: "
-            << format_duration(rep.saved_worker_seconds) << " kept in checkpoints, "
-            << format_duration(rep.lost_worker_seconds) << " thrown away; " << rep.resumed
-            << " realization(s) continued from a checkpoint" << std::endl;
-    if (stopped) {
-        err << "campaign: stopped by " << rep.stop_reason << "; " << left + failed
-            << " realization(s) not stored yet (" << rep.interrupted
-            << " interrupted). Resume with:\n  " << resume << std::endl;
-        return run_stopped;
-    }
-    if (!rep.fail_fast.empty()) {
-        err << "campaign: stopped early: " << rep.fail_fast
-            << ". The scene fails, not a seed: " << left
-            << " realization(s) were not run. Fix the sweep file (the message names "
-            << "what fails; check the units of its settings) and run it on another --store"
-            << std::endl;
-        return run_with_failures;
-    }
-    if (failed > 0) {
-        err << "campaign: finished with " << failed
-            << " failed realization(s); see `campaign status " << store_path.string()
-            << "`. Exceptions are retried by running the same command again." << std::endl;
-        return run_with_failures;
-    }
-    if (spec.target)
-        err << "campaign: finished: every point met the target or reached max_realizations; "
-            << status.done + status.failed << " realizations are in " << store_path.string()
-            << std::endl;
-    else
-        err << "campaign: finished: all " << totals.total << " realizations are in "
-            << store_path.string() << std::endl;
-    return run_ok;
+    return finish_run(st, spec, c.tasks, rep,
+                      RunEndContext{store_path, resume, totals.total, spec.target.has_value()}, out,
+                      err);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "cli/simulate.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include "hopper/core/error.hpp"
 #include "hopper/engine/realization.hpp"
 #include "hopper/store/store.hpp"
+#include "hopper_version.h"  // HOPPER_VERSION, generated at build time (version.cmake)
 
 namespace hopper::cli {
 
@@ -67,8 +69,16 @@ StoredTask stored_task(const std::filesystem::path& store_path, const std::strin
                 return std::get<double>(s.value);
         return fallback;
     };
-    return {*scene, seed, as_written("D_cm", p->D_cm), as_written("theta_deg", p->theta_deg),
-            sweep_path};
+    std::vector<std::string> versions;
+    for (const auto& r : st.runs)
+        if (std::find(versions.begin(), versions.end(), r.info.code_version) == versions.end())
+            versions.push_back(r.info.code_version);
+    return {*scene,
+            seed,
+            as_written("D_cm", p->D_cm),
+            as_written("theta_deg", p->theta_deg),
+            sweep_path,
+            std::move(versions)};
 }
 
 int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& err) {
@@ -196,8 +206,19 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
                               same_events(before->events, result.events);
             if (!same) {
                 err << "campaign: error: the run differs from the stored realization "
-                    << opt.realization << " of '" << *opt.point
-                    << "' (another version of hopper or another machine's arithmetic?)\n";
+                    << opt.realization << " of '" << *opt.point << "'";
+                std::string others;
+                for (const auto& v : stored->code_versions)
+                    if (v != HOPPER_VERSION) others += (others.empty() ? "" : ", ") + v;
+                if (others.empty())
+                    err << " (this version of hopper wrote the store: another machine's "
+                           "arithmetic, or a fault; please report it)\n";
+                else
+                    err << ": the store was written by hopper " << others << ", this is "
+                        << HOPPER_VERSION
+                        << ". A version whose engine arithmetic differs (CHANGELOG names the "
+                           "releases that changed it) reproduces a stored realization in "
+                           "distribution, not bit for bit\n";
                 return exit_error;
             }
             err << "campaign: identical to the stored realization (status, survival times, jam "

@@ -40,7 +40,8 @@ struct StoredTask {
     engine::SceneParams scene;
     std::uint64_t seed = 0;
     double D_cm = 0.0, theta_deg = 0.0;
-    std::string sweep_path;  // of the run whose sweep text gave the scene
+    std::string sweep_path;                  // of the run whose sweep text gave the scene
+    std::vector<std::string> code_versions;  // of the store's runs, oldest first, each once
 };
 StoredTask stored_task(const std::filesystem::path& store, const std::string& label,
                        int realization);
