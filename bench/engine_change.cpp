@@ -175,13 +175,13 @@ int main(int argc, char** argv) {
             }
         }
         const RealizationResult res = r.result();
+        const std::string status = o.settle_only ? "settled" : to_string(res.status);
         double flow = 0.0;
         for (double t : res.survival_times)
             flow += t;
         std::fprintf(f,
                      "{\"scene\": \"%s\", \"setting\": \"%s\", \"seed\": %llu, \"status\": \"%s\"",
-                     o.scene.c_str(), o.setting.c_str(), (unsigned long long)seed,
-                     to_string(res.status).c_str());
+                     o.scene.c_str(), o.setting.c_str(), (unsigned long long)seed, status.c_str());
         number(f, "phi", phi);
         number(f, "settle_time", res.diagnostics.settle_time);
         number(f, "rate", res.discharge_rate ? *res.discharge_rate : std::nan(""));
@@ -192,8 +192,8 @@ int main(int argc, char** argv) {
         std::fprintf(f, "}\n");
         std::fflush(f);
         std::fprintf(stderr, "  %s %s seed %llu: %s, %d jams, %.1f s cpu\n", o.scene.c_str(),
-                     o.setting.c_str(), (unsigned long long)seed, to_string(res.status).c_str(),
-                     res.n_jams, double(std::clock() - c0) / CLOCKS_PER_SEC);
+                     o.setting.c_str(), (unsigned long long)seed, status.c_str(), res.n_jams,
+                     double(std::clock() - c0) / CLOCKS_PER_SEC);
     }
     if (f != stdout) std::fclose(f);
     return 0;
