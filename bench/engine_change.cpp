@@ -6,6 +6,7 @@
 //   bench_engine_change --scene discharge|jamming --setting published|default
 //                       [--seeds N] [--first S] [--D CM] [--theta DEG] [--width CM]
 //                       [--particles N] [--max-time S] [--out FILE]
+//                       [--scheme gear4|verlet] [--delta N] [--corrections 0|1] [--settle-only 1]
 //
 // Scenes (the published bidisperse disks and material, tau_c = 8e-4 s):
 //   discharge  W = 20 cm, 1200 disks, D = 4.5 cm, theta = 45 deg: fill, settle, then the settled
@@ -15,13 +16,15 @@
 //              published shakes: jams, flowing time (the sum of the survival intervals), and
 //              the settled phi as above.
 // Settings: published = gear4, delta 50, no contact corrections (campaigns/paper); default = the
-// engine's IntegratorParams as they stand (what a sweep file without [integrator] gets).
+// engine's IntegratorParams as they stand (what a sweep file without [integrator] gets);
+// --scheme, --delta and --corrections override the setting's integrator; --settle-only 1 stops
+// after phi (no discharge: rate, jams and flow time are then those of no discharge).
 // phi: the area of the disks whose centres lie in the window over the window's area; the window
 // spans the column's width less 2 d_large on each side, from 2 d_large above the funnel's top
 // to 3 d_large below the packing's highest centre. The same estimator on both builds, so its
 // small bias at the window's edges cancels in the comparison.
 // One JSON object per seed and line on stdout (or --out): scene, setting, seed, status, phi,
-// rate, jams, flow_time, discharged, cpu_s.
+// settle_time (simulated s to rest), rate, jams, flow_time, discharged, cpu_s.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -40,6 +43,10 @@ struct Options {
     std::string scene = "discharge", setting = "published", out;
     int seeds = 32, first = 1, particles = -1;
     double D = -1, theta = 45.0, width = -1, max_time = -1;
+    std::string scheme;        // --scheme: overrides the setting's integrator
+    double delta = -1;         // --delta: steps per collision time
+    int corrections = -1;      // --corrections 0|1
+    bool settle_only = false;  // --settle-only 1: phi only, no discharge
 };
 
 [[noreturn]] void usage(const std::string& why) {
@@ -78,6 +85,14 @@ Options parse(int argc, char** argv) {
                 o.width = std::stod(v);
             else if (a == "--max-time")
                 o.max_time = std::stod(v);
+            else if (a == "--scheme")
+                o.scheme = v;
+            else if (a == "--delta")
+                o.delta = std::stod(v);
+            else if (a == "--corrections")
+                o.corrections = std::stoi(v);
+            else if (a == "--settle-only")
+                o.settle_only = std::stoi(v) != 0;
             else
                 usage("unknown option " + a);
         } catch (const std::logic_error&) {
@@ -89,6 +104,8 @@ Options parse(int argc, char** argv) {
     if (o.setting != "published" && o.setting != "default")
         usage("--setting: '" + o.setting + "' (allowed: published, default)");
     if (o.seeds < 1 || o.first < 0) usage("--seeds must be >= 1 and --first >= 0");
+    if (!o.scheme.empty() && o.scheme != "gear4" && o.scheme != "verlet")
+        usage("--scheme: '" + o.scheme + "' (allowed: gear4, verlet)");
     return o;
 }
 
@@ -106,6 +123,10 @@ SceneParams scene(const Options& o) {
         p.integrator.steps_per_collision = 50.0;
         p.integrator.contact_corrections = false;
     }
+    if (!o.scheme.empty())
+        p.integrator.scheme = o.scheme == "gear4" ? Scheme::gear4 : Scheme::verlet;
+    if (o.delta > 0) p.integrator.steps_per_collision = o.delta;
+    if (o.corrections >= 0) p.integrator.contact_corrections = o.corrections != 0;
     return p;
 }
 
@@ -148,18 +169,21 @@ int main(int argc, char** argv) {
         Realization r(p, seed);
         r.settle();
         const double phi = packing_fraction(r.system(), p);
-        r.open();
-        while (r.advance(1.0)) {
+        if (!o.settle_only) {
+            r.open();
+            while (r.advance(1.0)) {
+            }
         }
         const RealizationResult res = r.result();
+        const std::string status = o.settle_only ? "settled" : to_string(res.status);
         double flow = 0.0;
         for (double t : res.survival_times)
             flow += t;
         std::fprintf(f,
                      "{\"scene\": \"%s\", \"setting\": \"%s\", \"seed\": %llu, \"status\": \"%s\"",
-                     o.scene.c_str(), o.setting.c_str(), (unsigned long long)seed,
-                     to_string(res.status).c_str());
+                     o.scene.c_str(), o.setting.c_str(), (unsigned long long)seed, status.c_str());
         number(f, "phi", phi);
+        number(f, "settle_time", res.diagnostics.settle_time);
         number(f, "rate", res.discharge_rate ? *res.discharge_rate : std::nan(""));
         std::fprintf(f, ", \"jams\": %d", res.n_jams);
         number(f, "flow_time", flow);
@@ -168,8 +192,8 @@ int main(int argc, char** argv) {
         std::fprintf(f, "}\n");
         std::fflush(f);
         std::fprintf(stderr, "  %s %s seed %llu: %s, %d jams, %.1f s cpu\n", o.scene.c_str(),
-                     o.setting.c_str(), (unsigned long long)seed, to_string(res.status).c_str(),
-                     res.n_jams, double(std::clock() - c0) / CLOCKS_PER_SEC);
+                     o.setting.c_str(), (unsigned long long)seed, status.c_str(), res.n_jams,
+                     double(std::clock() - c0) / CLOCKS_PER_SEC);
     }
     if (f != stdout) std::fclose(f);
     return 0;

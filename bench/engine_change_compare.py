@@ -69,7 +69,7 @@ def compare(old, new):
             bad.append(f"{key[0]} {key[1]}: the two builds ran different seeds")
         for side, rows in (("old", a), ("new", b)):
             for r in rows:
-                if r["status"] != "complete":
+                if r["status"] not in ("complete", "settled"):
                     bad.append(f"{key[0]} {key[1]} {side} seed {r['seed']}: {r['status']}")
         obs = [("phi", 4)]
         if key[0] == "discharge":
@@ -79,11 +79,13 @@ def compare(old, new):
         for name, digits in obs:
             ma, ea, na = mean_se([r[name] for r in a])
             mb, eb, nb = mean_se([r[name] for r in b])
+            if na == 0 and nb == 0:  # settle-only runs: no rate, no jams
+                continue
             z = z_of(ma, ea, mb, eb)
             worst = max(worst, abs(z)) if not math.isnan(z) else worst
             lines.append(f"| {key[0]} | {key[1]} | {name} | {fmt(ma, ea, digits)} | "
                          f"{fmt(mb, eb, digits)} | {na} / {nb} | {z:+.2f} |")
-        if key[0] == "jamming":
+        if key[0] == "jamming" and all(r["status"] == "complete" for r in a + b):
             ja, jb = sum(r["jams"] for r in a), sum(r["jams"] for r in b)
             fa, fb = sum(r["flow_time"] for r in a), sum(r["flow_time"] for r in b)
             if ja and jb:
