@@ -5,7 +5,7 @@
 #   CITATION.cff under P;
 # - the installed campaign names the release (project() of CMakeLists.txt) and runs the
 #   installed analysis scripts, not the source tree's;
-# - a project outside hopper (tests/install/consumer) finds it with find_package(hopper 0.3),
+# - a project outside hopper (tests/install/consumer) finds it with find_package(hopper 0.4),
 #   links hopper::engine and runs one tiny realization;
 # - `pip install ./analysis` into a venv made with --system-site-packages (Debian's numpy,
 #   pandas, h5py, matplotlib; setuptools and wheel from Debian, no network) gives the package
