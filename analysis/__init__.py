@@ -8,5 +8,5 @@ hopper_analysis; the files are also run as scripts by `campaign plot` and `campa
 """
 from .hopper_store import Store, open_store, parse_scene, setting_text  # noqa: F401
 
-__version__ = "0.3.0"  # the project's release (CMakeLists.txt project(), CHANGELOG.md)
+__version__ = "0.4.0"  # the project's release (CMakeLists.txt project(), CHANGELOG.md)
 __all__ = ["Store", "open_store", "parse_scene", "setting_text"]

@@ -1,5 +1,5 @@
 # Writes OUT (a header defining HOPPER_VERSION, "RELEASE+DESCRIBE": the release number of the
-# top-level project() and `git describe` of SRC, e.g. "0.3.0+2f9eccb-dirty"; "RELEASE" alone
+# top-level project() and `git describe` of SRC, e.g. "0.4.0+2f9eccb-dirty"; "RELEASE" alone
 # outside a git checkout, as from a release archive) at every build, and
 # touches OUT only when the version changed, so that a commit (or an edit that makes the tree
 # dirty) is stamped into `campaign --version`, results and stores without re-running cmake,
