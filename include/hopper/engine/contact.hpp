@@ -206,8 +206,8 @@ struct HertzSpringLaw {
     // The pair's constants (round 3: computed once per neighbour rebuild, not per step; the
     // same expressions, so the same bits): K = hertz_k sqrt(R*) and the damping's
     // alpha sqrt(mbar K), which evaluate() multiplies by x^(1/4).
-    HOPPER_HOT_INLINE static void pair_constants(const ContactParams& p, double rstar,
-                                                 double mbar, double& K, double& eta0) {
+    HOPPER_HOT_INLINE static void pair_constants(const ContactParams& p, double rstar, double mbar,
+                                                 double& K, double& eta0) {
         K = p.hertz_k * std::sqrt(rstar);
         eta0 = p.hertz_alpha * std::sqrt(mbar * K);
     }
