@@ -1,0 +1,87 @@
+#!/usr/bin/python3
+"""bench/engine_change_compare.py (issue 25, part 2) on synthetic JSON lines with answers by hand.
+
+    test_engine_change.py PROJECT_SOURCE_DIR
+
+1. Two builds with the same per-seed values: every z is 0, exit 0.
+2. A jamming scene whose new build has 60 jams in 60 s of flow against 30 jams in 60 s (tau 1.0
+   against 2.0 s): z on ln tau = (ln 1 - ln 2) / sqrt(1/30 + 1/60) = -3.10, exit 1.
+3. phi: old 0.80, 0.82 (mean 0.81, se 0.01), new 0.83, 0.85 (0.84, 0.01): z = +2.12, printed.
+4. A failed realization or different seeds: exit 1 with the problem named.
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+src = sys.argv[1]
+tool = os.path.join(src, "bench", "engine_change_compare.py")
+fails = 0
+
+
+def check(cond, what):
+    global fails
+    print(("ok   " if cond else "FAIL ") + what)
+    fails += 0 if cond else 1
+
+
+def row(scene, seed, phi, jams=0, flow=0.0, rate=None, status="complete"):
+    return {"scene": scene, "setting": "published", "seed": seed, "status": status, "phi": phi,
+            "rate": rate, "jams": jams, "flow_time": flow, "discharged": 100, "cpu_s": 1.0}
+
+
+def run(old, new):
+    with tempfile.TemporaryDirectory() as d:
+        paths = []
+        for name, rows in (("old", old), ("new", new)):
+            p = os.path.join(d, name + ".jsonl")
+            with open(p, "w") as f:
+                for r in rows:
+                    f.write(json.dumps(r) + "\n")
+            paths.append(p)
+        r = subprocess.run([sys.executable, tool] + paths, capture_output=True, text=True)
+        return r.returncode, r.stdout, r.stderr
+
+
+def z_in(out, observable):
+    for line in out.splitlines():
+        cells = [c.strip() for c in line.split("|")]
+        if len(cells) > 3 and cells[3] == observable:
+            return float(cells[-2])
+    return None
+
+
+# 1. identical
+same = [row("jamming", 1, 0.80, 10, 20.0), row("jamming", 2, 0.82, 20, 40.0)]
+rc, out, err = run(same, same)
+check(rc == 0, "identical builds exit 0 (rc %d)" % rc)
+check(z_in(out, "phi") == 0.0 and z_in(out, "tau (s)") == 0.0, "identical builds: z = 0")
+
+# 2. tau halved
+old = [row("jamming", 1, 0.81, 15, 30.0), row("jamming", 2, 0.81, 15, 30.0)]
+new = [row("jamming", 1, 0.81, 30, 30.0), row("jamming", 2, 0.81, 30, 30.0)]
+rc, out, err = run(old, new)
+want = (math.log(1.0) - math.log(2.0)) / math.sqrt(1 / 30 + 1 / 60)
+check(rc == 1, "tau halved: exit 1 (rc %d)" % rc)
+check(abs(z_in(out, "tau (s)") - want) < 0.01, "tau halved: z %.2f (by hand %.2f)" % (z_in(out, "tau (s)"), want))
+
+# 3. phi by hand
+old = [row("discharge", 1, 0.80, rate=100.0), row("discharge", 2, 0.82, rate=100.0)]
+new = [row("discharge", 1, 0.83, rate=100.0), row("discharge", 2, 0.85, rate=100.0)]
+rc, out, err = run(old, new)
+want = 0.03 / math.hypot(0.01, 0.01)
+check(abs(z_in(out, "phi") - want) < 0.01, "phi: z %.2f (by hand %.2f)" % (z_in(out, "phi"), want))
+check(rc == 0, "phi z below 3: exit 0 (rc %d)" % rc)
+
+# 4. failed realization, other seeds
+bad = [row("jamming", 1, 0.80, 10, 20.0, status="failed"), row("jamming", 2, 0.82, 20, 40.0)]
+rc, out, err = run(same, bad)
+check(rc == 1 and "seed 1: failed" in err, "a failed realization: exit 1, named")
+other = [row("jamming", 3, 0.80, 10, 20.0), row("jamming", 2, 0.82, 20, 40.0)]
+rc, out, err = run(same, other)
+check(rc == 1 and "different seeds" in err, "different seeds: exit 1, named")
+
+print("%d failed" % fails)
+sys.exit(1 if fails else 0)
