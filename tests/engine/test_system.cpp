@@ -158,12 +158,7 @@ TEST(Springs, SurviveARebuildThatCompactsAndReorders) {
     const ContactParams cp = contact_params(0.5, 0.5);
     System s(system_config(Scheme::gear4, 50.0, cp, cp));
     const double dw = d_large, W = 20.0 * d_large, H = 45.0 * d_large;
-    for (double x = -0.5 * dw; x <= W + 0.5 * dw + 1e-12; x += 0.5 * dw)
-        s.add_wall(Vec2(x, -0.5 * dw), dw);
-    for (double y = 0.0; y <= H; y += 0.5 * dw) {
-        s.add_wall(Vec2(-0.5 * dw, y), dw);
-        s.add_wall(Vec2(W + 0.5 * dw, y), dw);
-    }
+    add_open_box(s, W, H);
     std::vector<int> outside;
     for (int k = 0; k < 3; ++k)
         outside.push_back(add_disk(s, Vec2(-10.0 * dw - 2.0 * k * dw, 5.0 * dw), d_small));
