@@ -175,6 +175,7 @@ int main(int argc, char** argv) {
             }
         }
         const RealizationResult res = r.result();
+        const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
         const std::string status = o.settle_only ? "settled" : to_string(res.status);
         double flow = 0.0;
         for (double t : res.survival_times)
@@ -188,12 +189,11 @@ int main(int argc, char** argv) {
         std::fprintf(f, ", \"jams\": %d", res.n_jams);
         number(f, "flow_time", flow);
         std::fprintf(f, ", \"discharged\": %d", res.discharged);
-        number(f, "cpu_s", double(std::clock() - c0) / CLOCKS_PER_SEC);
+        number(f, "cpu_s", cpu);
         std::fprintf(f, "}\n");
         std::fflush(f);
         std::fprintf(stderr, "  %s %s seed %llu: %s, %d jams, %.1f s cpu\n", o.scene.c_str(),
-                     o.setting.c_str(), (unsigned long long)seed, status.c_str(), res.n_jams,
-                     double(std::clock() - c0) / CLOCKS_PER_SEC);
+                     o.setting.c_str(), (unsigned long long)seed, status.c_str(), res.n_jams, cpu);
     }
     if (f != stdout) std::fclose(f);
     return 0;

@@ -99,6 +99,13 @@ double written_number(const std::vector<core::Setting>& parameters, std::string_
 
 }  // namespace
 
+std::map<std::string_view, int> allotments(const store::CampaignPlan& plan) {
+    std::map<std::string_view, int> out;
+    for (const auto& p : plan.points)
+        out.emplace(p.label, p.realizations());
+    return out;
+}
+
 int first_allotment(const config::CampaignSpec& spec, const config::Point& point) {
     if (!spec.target) return point.realizations;
     return std::clamp(point.first_round, std::min(1, point.realizations), point.realizations);

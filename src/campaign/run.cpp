@@ -117,19 +117,11 @@ ResumableTaskRunner make_runner(const RunOptions& opt, const Campaign& c) {
     };
 }
 
-// Each point's allotment (realizations planned so far), by label: the store's plan.
-std::map<std::string_view, int> allotments(const store::Store& st) {
-    std::map<std::string_view, int> out;
-    for (const auto& p : st.plan().points)
-        out.emplace(p.label, p.realizations());
-    return out;
-}
-
 // Records what a round allots beyond the store's plan: the new seeds of every point whose
 // allotment grows (replay_rounds decides; the record only lists).
 void allot_round(store::Store& st, const Campaign& c, const RoundState& rs) {
     const auto& spec = c.sweep.campaign;
-    const auto have = allotments(st);
+    const auto have = allotments(st.plan());
     store::AllotmentRecord rec;
     for (std::size_t p = 0; p < rs.points.size(); ++p) {
         const auto it = have.find(spec.points[p].label);
@@ -301,7 +293,7 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     // allotted (the store's plan; run_rounds extends it), never max_realizations (issue 29).
     std::vector<int> planned(spec.points.size());
     {
-        const auto have = allotments(st);
+        const auto have = allotments(st.plan());
         for (std::size_t p = 0; p < spec.points.size(); ++p) {
             planned[p] = c.tasks.realizations(static_cast<int>(p));
             if (spec.target) {

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <map>
-#include <string_view>
 #include <vector>
 
+#include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
 #include "hopper/campaign/run.hpp"
 
@@ -13,9 +12,7 @@ namespace hopper::campaign {
 
 Outcome count_outcome(const store::Store& st, const config::CampaignSpec& spec,
                       const config::TaskList& tasks) {
-    std::map<std::string_view, int> allotted;  // the store's plan: the rounds may have grown it
-    for (const auto& p : st.plan().points)
-        allotted.emplace(p.label, p.realizations());
+    const auto allotted = allotments(st.plan());  // the rounds may have grown them
     Outcome o;
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
         const auto it = allotted.find(spec.points[p].label);

@@ -4,7 +4,9 @@
 // tasks are handed out.
 
 #include <filesystem>
+#include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hopper/config/sweep.hpp"
@@ -22,6 +24,10 @@ std::string scene_text(const engine::SceneParams& p);
 // The store's view of the campaign: every point with its label, physics text, limit and the
 // seeds of its first allotment (first_allotment).
 store::CampaignPlan make_plan(const config::CampaignSpec& spec);
+
+// Each point's allotment (realizations planned so far), by label (views into `plan`): with a
+// target the rounds so far, else the sweep's realizations.
+std::map<std::string_view, int> allotments(const store::CampaignPlan& plan);
 
 // The realizations a point is allotted before anything is stored: all of them, or with a target
 // its first round (its `realizations`, at most max_realizations).
