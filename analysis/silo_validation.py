@@ -36,46 +36,52 @@ plt.rcParams.update({"pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hop
 
 
 def summarize(path):
-    rows = []
     with open_store(path) as s:
-        pts = s.points
-        surv = s.survival
-        arches = s.arches
-        r = s.realizations
-        for i, pt in pts.iterrows():
-            d = float(pt["particles.d_large_m"]) if "particles.d_large_m" in pt else None
-            if d is None or not np.isfinite(d):
-                sys.exit("silo_validation.py: %s has no particles.d_large_m" % path)
-            D = float(pt["hopper.outlet_m"])
-            sv = surv[surv["point"] == i]
-            k = int(sv["event"].sum())
-            grains = float(sv["avalanche_size"].sum())
-            row = {"label": pt["label"], "D_over_d": D / d, "realizations": int((r["point"] == i).sum()),
-                   "clogs": k, "grains": grains}
-            if k > 0:
-                m = grains / k
-                row.update({"mean_s": m, "se": m / math.sqrt(k),
-                            "lo": 2 * grains / stats.chi2.ppf(0.975, 2 * k),
-                            "hi": 2 * grains / stats.chi2.ppf(0.025, 2 * k)})
-            else:
-                row.update({"mean_s": None, "se": None,
-                            "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
-            a = arches[arches["point"] == i]
-            found = a[a["disks"] > 0]
-            sizes = found["disks"].to_numpy(int)
-            ratios = []
-            for span, ys in zip(found["span"], found["y"]):
-                h = max(ys) + d / 2
-                if h > 0:
-                    ratios.append(span / h)
-            row.update({"arches_found": int(len(found)), "arch_jams": int(len(a)),
-                        "arch_mean_size": float(sizes.mean()) if len(sizes) else None,
-                        "arch_size_counts": {int(n): int(c) for n, c in
-                                             zip(*np.unique(sizes, return_counts=True))},
-                        "aspect_mean": float(np.mean(ratios)) if ratios else None,
-                        "aspect_se": float(np.std(ratios, ddof=1) / math.sqrt(len(ratios)))
-                        if len(ratios) > 1 else None})
-            rows.append(row)
+        return summarize_store(s, path)
+
+
+def summarize_store(s, path):
+    """One row per point of the store `s` (a hopper_store.Store; `path` names it in errors),
+    sorted by D/d."""
+    rows = []
+    pts = s.points
+    surv = s.survival
+    arches = s.arches
+    r = s.realizations
+    for i, pt in pts.iterrows():
+        d = float(pt["particles.d_large_m"]) if "particles.d_large_m" in pt else None
+        if d is None or not np.isfinite(d):
+            sys.exit("silo_validation.py: %s has no particles.d_large_m" % path)
+        D = float(pt["hopper.outlet_m"])
+        sv = surv[surv["point"] == i]
+        k = int(sv["event"].sum())
+        grains = float(sv["avalanche_size"].sum())
+        row = {"label": pt["label"], "D_over_d": D / d, "realizations": int((r["point"] == i).sum()),
+               "clogs": k, "grains": grains}
+        if k > 0:
+            m = grains / k
+            row.update({"mean_s": m, "se": m / math.sqrt(k),
+                        "lo": 2 * grains / stats.chi2.ppf(0.975, 2 * k),
+                        "hi": 2 * grains / stats.chi2.ppf(0.025, 2 * k)})
+        else:
+            row.update({"mean_s": None, "se": None,
+                        "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
+        a = arches[arches["point"] == i]
+        found = a[a["disks"] > 0]
+        sizes = found["disks"].to_numpy(int)
+        ratios = []
+        for span, ys in zip(found["span"], found["y"]):
+            h = max(ys) + d / 2
+            if h > 0:
+                ratios.append(span / h)
+        row.update({"arches_found": int(len(found)), "arch_jams": int(len(a)),
+                    "arch_mean_size": float(sizes.mean()) if len(sizes) else None,
+                    "arch_size_counts": {int(n): int(c) for n, c in
+                                         zip(*np.unique(sizes, return_counts=True))},
+                    "aspect_mean": float(np.mean(ratios)) if ratios else None,
+                    "aspect_se": float(np.std(ratios, ddof=1) / math.sqrt(len(ratios)))
+                    if len(ratios) > 1 else None})
+        rows.append(row)
     return sorted(rows, key=lambda x: x["D_over_d"])
 
 

@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""analysis/silo_validation.py (issue 26) on a synthetic store (hopper_store.Store.from_frames)
+whose answers are known by hand: <s> = grains / clogs with the censored last intervals in the
+grains, its chi-square interval, the lower bound of an outlet with no clog, the arches (found
+share, mean size, span / height), and the weighted fit ln(<s>+1) = a + b (D/d)^2 over the
+outlets with at least 5 clogs, recovered exactly from points that lie on a line.
+
+usage: test_silo_validation.py SOURCE_DIR   (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
+"""
+import math
+import os
+import sys
+
+try:
+    import pandas as pd
+    from scipy import stats
+except ImportError:
+    sys.exit(77)
+
+SRC = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+sys.path.insert(0, os.path.join(SRC, "analysis"))
+import silo_validation  # noqa: E402
+from hopper_store import Store  # noqa: E402
+
+failures = []
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+        print("FAIL: " + what)
+
+
+d = 0.01  # m
+A, B = -1.0, 0.5  # the line the three fitted outlets lie on
+# Point 0: D/d = 3, two realizations: r0 avalanches 10, 20 (clogs), 5 (censored);
+# r1 30 (clog), 15 (censored): 3 clogs, 80 grains -> <s> = 80/3.
+# Points 1-3: D/d = 2, 4, 4.5 (listed out of order), 5 clogs each of size
+# e^(A + B (D/d)^2) - 1, so that ln(<s>+1) lies on the line exactly.
+# Point 4: D/d = 5, one realization with no clog, 900 grains, censored.
+pts = pd.DataFrame({"label": ["p3", "p2", "p4", "p45", "p5"],
+                    "hopper.outlet_m": [3 * d, 2 * d, 4 * d, 4.5 * d, 5 * d],
+                    "particles.d_large_m": [d] * 5})
+rows = [(0, 0, 0, 1, 10.0), (0, 0, 1, 1, 20.0), (0, 0, 2, 0, 5.0),
+        (0, 1, 0, 1, 30.0), (0, 1, 1, 0, 15.0)]
+for p, r_ in ((1, 2.0), (2, 4.0), (3, 4.5)):
+    s = math.exp(A + B * r_ ** 2) - 1
+    rows += [(p, 0, i, 1, s) for i in range(5)]
+rows.append((4, 0, 0, 0, 900.0))
+survival = pd.DataFrame(rows, columns=["point", "realization", "interval", "event",
+                                       "avalanche_size"])
+realizations = pd.DataFrame({"point": [0, 0, 1, 2, 3, 4], "realization": [0, 1, 0, 0, 0, 0]})
+# Arches of point 0: two found (5 disks: span 0.04 m, highest centre 0.005 m -> height 0.01 m,
+# ratio 4; 3 disks: span 0.03 m, highest centre 0.01 m -> height 0.015 m, ratio 2), one jam with
+# no arch found (0 disks), which counts in arch_jams only.
+arches = pd.DataFrame({"point": [0, 0, 0], "disks": [5, 3, 0], "span": [0.04, 0.03, 0.0],
+                       "y": [[0.0, 0.005, 0.002, 0.004, 0.001], [0.0, 0.01, 0.0], []]})
+store = Store.from_frames("synthetic", {"points": pts, "survival": survival,
+                                        "realizations": realizations, "arches": arches})
+res = silo_validation.summarize_store(store, "synthetic")
+
+check([round(r["D_over_d"], 12) for r in res] == [2.0, 3.0, 4.0, 4.5, 5.0],
+      "sorted by D/d: %s" % [r["D_over_d"] for r in res])
+p3 = res[1]
+check(p3["clogs"] == 3 and p3["grains"] == 80.0 and p3["realizations"] == 2,
+      "point D/d 3 counts: %s" % {k: p3[k] for k in ("clogs", "grains", "realizations")})
+check(abs(p3["mean_s"] - 80.0 / 3) < 1e-12, "<s> = 80/3: %s" % p3["mean_s"])
+check(abs(p3["se"] - 80.0 / 3 / math.sqrt(3)) < 1e-12, "se = <s>/sqrt(3)")
+check(abs(p3["lo"] - 160.0 / stats.chi2.ppf(0.975, 6)) < 1e-9 and
+      abs(p3["hi"] - 160.0 / stats.chi2.ppf(0.025, 6)) < 1e-9, "chi-square interval")
+check(p3["lo"] < p3["mean_s"] < p3["hi"], "interval holds <s>")
+check(p3["arches_found"] == 2 and p3["arch_jams"] == 3, "arches found 2 of 3 jams")
+check(abs(p3["arch_mean_size"] - 4.0) < 1e-12, "mean arch size 4: %s" % p3["arch_mean_size"])
+check(p3["arch_size_counts"] == {3: 1, 5: 1}, "size counts: %s" % p3["arch_size_counts"])
+check(abs(p3["aspect_mean"] - 3.0) < 1e-12 and abs(p3["aspect_se"] - 1.0) < 1e-12,
+      "span/height 3 +- 1: %s +- %s" % (p3["aspect_mean"], p3["aspect_se"]))
+p5 = res[4]
+# No clog: <s> unknown; 95 % one-sided lower bound T / (-ln 0.05) = 900 / 2.9957.
+check(p5["mean_s"] is None and abs(p5["lo"] - 900.0 / -math.log(0.05)) < 1e-9,
+      "bound without a clog: %s" % p5["lo"])
+check(res[0]["arch_mean_size"] is None and res[0]["arch_jams"] == 0, "no arches at D/d 2")
+
+f = silo_validation.fit(res)
+check(f is not None, "a fit over three outlets")
+if f is not None:
+    # D/d = 3 has 3 clogs (< 5) and D/d = 5 none: the fit uses 2, 4 and 4.5 only.
+    check(f["outlets"] == [2.0, 4.0, 4.5], "fitted outlets: %s" % f["outlets"])
+    check(abs(f["a"] - A) < 1e-9 and abs(f["b"] - B) < 1e-9, "a, b = %s, %s" % (f["a"], f["b"]))
+    check(f["chi2_reduced"] < 1e-12, "points on the line: chi2 %s" % f["chi2_reduced"])
+    check(f["b_err"] > 0 and f["a_err"] > 0, "errors of a and b")
+# Two outlets with enough clogs are no fit.
+check(silo_validation.fit([r for r in res if r["D_over_d"] != 4.5]) is None,
+      "no fit over two outlets")
+
+print("silo_validation: %d failed" % len(failures))
+sys.exit(1 if failures else 0)
