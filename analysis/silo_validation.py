@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The flat-silo validation of issue 26 (docs/validation.md): table, fit and figure.
 
-usage: silo_validation.py REMOVE_ARCH.h5 [REFILL.h5] [--out DIR]
+usage: silo_validation.py REMOVE_ARCH.h5 [REFILL.h5] [--out DIR] [--keep-first]
 
 Per outlet D/d (d: the disks' diameter; the silos are monodisperse): the avalanches (survival
 intervals ended by a clog; the censored last interval of a realization counts in <s>'s exposure,
@@ -10,6 +10,10 @@ as `campaign analyze`, docs/statistics.md), <s> = grains / clogs with its standa
 found, the mean aspect ratio span / height), for both protocols. The fit
 ln(<s> + 1) = a + b (D/d)^2 is weighted least squares with sigma_i = se_i / (<s>_i + 1), over the
 outlets with at least 5 clogs; a and b with their standard errors and the reduced chi-square.
+The arch-removal store's <s> leaves out each realization's first avalanche, the one from the
+settled fill to the first clog (the experiments discard it too: a settled packing is not the
+steady flow), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
+ones too ("arches found / all clogs"). A refill realization is one first avalanche.
 Arch height: the top of the arch's highest disk above the outlet plane (y_i + d/2); span: the
 distance between the arch's two contacts with the wall disks (docs/model.md, step 9).
 
@@ -35,14 +39,33 @@ from hopper_store import open_store  # noqa: E402
 plt.rcParams.update({"pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hopper"})
 
 
-def summarize(path):
+def summarize(path, skip_first=False):
     with open_store(path) as s:
-        return summarize_store(s, path)
+        return summarize_store(s, path, skip_first)
 
 
-def summarize_store(s, path):
+def interval_stats(sv):
+    """<s> of survival intervals `sv`: grains / clogs (censored intervals add grains, no clog),
+    its standard error and 95 % chi-square interval; with no clog the one-sided 95 % lower bound
+    grains / (-ln 0.05)."""
+    k = int(sv["event"].sum())
+    grains = float(sv["avalanche_size"].sum())
+    row = {"clogs": k, "grains": grains}
+    if k > 0:
+        m = grains / k
+        row.update({"mean_s": m, "se": m / math.sqrt(k),
+                    "lo": 2 * grains / stats.chi2.ppf(0.975, 2 * k),
+                    "hi": 2 * grains / stats.chi2.ppf(0.025, 2 * k)})
+    else:
+        row.update({"mean_s": None, "se": None,
+                    "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
+    return row
+
+
+def summarize_store(s, path, skip_first=False):
     """One row per point of the store `s` (a hopper_store.Store; `path` names it in errors),
-    sorted by D/d."""
+    sorted by D/d. With skip_first the first interval of every realization (the avalanche from
+    the settled fill to the first clog) is left out of <s> and reported apart ("first")."""
     rows = []
     pts = s.points
     surv = s.survival
@@ -54,33 +77,39 @@ def summarize_store(s, path):
             sys.exit("silo_validation.py: %s has no particles.d_large_m" % path)
         D = float(pt["hopper.outlet_m"])
         sv = surv[surv["point"] == i]
-        k = int(sv["event"].sum())
-        grains = float(sv["avalanche_size"].sum())
-        row = {"label": pt["label"], "D_over_d": D / d, "realizations": int((r["point"] == i).sum()),
-               "clogs": k, "grains": grains}
-        if k > 0:
-            m = grains / k
-            row.update({"mean_s": m, "se": m / math.sqrt(k),
-                        "lo": 2 * grains / stats.chi2.ppf(0.975, 2 * k),
-                        "hi": 2 * grains / stats.chi2.ppf(0.025, 2 * k)})
+        row = {"label": pt["label"], "D_over_d": D / d, "realizations": int((r["point"] == i).sum())}
+        if skip_first:
+            row.update(interval_stats(sv[sv["interval"] > 0]))
+            row["first"] = interval_stats(sv[sv["interval"] == 0])
         else:
-            row.update({"mean_s": None, "se": None,
-                        "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
+            row.update(interval_stats(sv))
         a = arches[arches["point"] == i]
         found = a[a["disks"] > 0]
         sizes = found["disks"].to_numpy(int)
-        ratios = []
+        ratios = []  # span / height
         for span, ys in zip(found["span"], found["y"]):
             h = max(ys) + d / 2
-            if h > 0:
+            if h > 0 and span > 0:
                 ratios.append(span / h)
+        # Garcimartin et al. (PRE 82, 031306, 2010) give height / half-span per arch; here of
+        # the disks' centres: the highest centre above the line through the two end disks'
+        # centres, over half their horizontal distance (a semicircle of centres gives 1).
+        halves = []
+        for xs, ys in zip(found["x"], found["y"]):
+            if len(xs) >= 2 and xs[-1] > xs[0]:
+                base = 0.5 * (ys[0] + ys[-1])
+                halves.append((max(ys) - base) / (0.5 * (xs[-1] - xs[0])))
         row.update({"arches_found": int(len(found)), "arch_jams": int(len(a)),
                     "arch_mean_size": float(sizes.mean()) if len(sizes) else None,
                     "arch_size_counts": {int(n): int(c) for n, c in
                                          zip(*np.unique(sizes, return_counts=True))},
                     "aspect_mean": float(np.mean(ratios)) if ratios else None,
                     "aspect_se": float(np.std(ratios, ddof=1) / math.sqrt(len(ratios)))
-                    if len(ratios) > 1 else None})
+                    if len(ratios) > 1 else None,
+                    "height_over_half_span": float(np.mean(halves)) if halves else None,
+                    "height_over_half_span_se":
+                    float(np.std(halves, ddof=1) / math.sqrt(len(halves)))
+                    if len(halves) > 1 else None})
         rows.append(row)
     return sorted(rows, key=lambda x: x["D_over_d"])
 
@@ -103,17 +132,35 @@ def fit(rows):
             "outlets": [r["D_over_d"] for r in use]}
 
 
+def mean_s_text(r):
+    if r["mean_s"] is not None:
+        return "%.4g +- %.2g [%.4g, %.4g]" % (r["mean_s"], r["se"], r["lo"], r["hi"])
+    return "> %.4g (no clog)" % r["lo"] if r["grains"] > 0 else "-"
+
+
 def table(name, rows):
+    first = any("first" in r for r in rows)
     out = ["### %s" % name, "",
-           "| D/d | realizations | clogs | <s> +- se [95 % CI] | arches found / clogs | mean arch size (disks) | span / height +- se |",
-           "|---|---|---|---|---|---|---|"]
+           "| D/d | realizations | clogs | <s> +- se [95 % CI] |" +
+           (" first avalanches: clogs, <s> +- se |" if first else "") +
+           " arches found / all clogs | mean arch size (disks) | span / height +- se |"
+           " height / half-span +- se |",
+           "|---|---|---|---|" + ("---|" if first else "") + "---|---|---|---|"]
     for r in rows:
-        s = ("%.4g +- %.2g [%.4g, %.4g]" % (r["mean_s"], r["se"], r["lo"], r["hi"])
-             if r["mean_s"] is not None else "> %.4g (no clog)" % r["lo"])
-        out.append("| %.2f | %d | %d | %s | %d / %d | %s | %s |" % (
-            r["D_over_d"], r["realizations"], r["clogs"], s, r["arches_found"], r["arch_jams"],
-            "%.2f" % r["arch_mean_size"] if r["arch_mean_size"] is not None else "-",
-            "%.2f +- %.2f" % (r["aspect_mean"], r["aspect_se"]) if r["aspect_se"] else "-"))
+        if r["realizations"] == 0:
+            out.append("| %.2f | 0 | not run yet |" % r["D_over_d"])
+            continue
+        f = ""
+        if first:
+            q = r["first"]
+            f = " %d, %s |" % (q["clogs"], "%.3g +- %.2g" % (q["mean_s"], q["se"])
+                               if q["mean_s"] is not None else mean_s_text(q))
+        out.append("| %.2f | %d | %d | %s |%s %d / %d | %s | %s | %s |" % (
+            r["D_over_d"], r["realizations"], r["clogs"], mean_s_text(r), f, r["arches_found"],
+            r["arch_jams"], "%.2f" % r["arch_mean_size"] if r["arch_mean_size"] is not None else "-",
+            "%.2f +- %.2f" % (r["aspect_mean"], r["aspect_se"]) if r["aspect_se"] else "-",
+            "%.2f +- %.2f" % (r["height_over_half_span"], r["height_over_half_span_se"])
+            if r["height_over_half_span_se"] else "-"))
     return "\n".join(out) + "\n"
 
 
@@ -122,11 +169,14 @@ def main():
     ap.add_argument("remove_arch")
     ap.add_argument("refill", nargs="?")
     ap.add_argument("--out", default=".")
+    ap.add_argument("--keep-first", action="store_true",
+                    help="count each arch-removal realization's first avalanche (from the settled "
+                    "fill) in <s> too")
     args = ap.parse_args()
     for p in [args.remove_arch, args.refill]:
         if p and not os.path.exists(p):
             sys.exit("silo_validation.py: no such store: %s" % p)
-    result = {"remove_arch": summarize(args.remove_arch)}
+    result = {"remove_arch": summarize(args.remove_arch, skip_first=not args.keep_first)}
     result["fit_remove_arch"] = fit(result["remove_arch"])
     if args.refill:
         result["refill"] = summarize(args.refill)
@@ -157,7 +207,7 @@ def main():
         e = [r["se"] / (r["mean_s"] + 1) for r in rows]
         ax.errorbar(x, y, yerr=e, fmt=marker, mfc="none" if key == "refill" else None,
                     label="%s (%s clogs)" % (name, "/".join(str(r["clogs"]) for r in rows)))
-    bounds = [r for r in result["remove_arch"] if r["mean_s"] is None]
+    bounds = [r for r in result["remove_arch"] if r["mean_s"] is None and r["grains"] > 0]
     for r in bounds:
         ax.annotate("", xy=(r["D_over_d"] ** 2, math.log(r["lo"] + 1) + 0.6),
                     xytext=(r["D_over_d"] ** 2, math.log(r["lo"] + 1)),

@@ -3,7 +3,9 @@
 whose answers are known by hand: <s> = grains / clogs with the censored last intervals in the
 grains, its chi-square interval, the lower bound of an outlet with no clog, the arches (found
 share, mean size, span / height), and the weighted fit ln(<s>+1) = a + b (D/d)^2 over the
-outlets with at least 5 clogs, recovered exactly from points that lie on a line.
+outlets with at least 5 clogs, recovered exactly from points that lie on a line; each
+realization's first avalanche left out and reported apart (skip_first), the arches' height over
+half-span of their centres.
 
 usage: test_silo_validation.py SOURCE_DIR   (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
 """
@@ -53,7 +55,10 @@ realizations = pd.DataFrame({"point": [0, 0, 1, 2, 3, 4], "realization": [0, 1, 
 # Arches of point 0: two found (5 disks: span 0.04 m, highest centre 0.005 m -> height 0.01 m,
 # ratio 4; 3 disks: span 0.03 m, highest centre 0.01 m -> height 0.015 m, ratio 2), one jam with
 # no arch found (0 disks), which counts in arch_jams only.
+# Of the centres (height / half-span): the first rises 0.005 - 0.0005 over a half-span of 0.02
+# (0.225), the second 0.01 over 0.01 (1.0): 0.6125 +- 0.3875.
 arches = pd.DataFrame({"point": [0, 0, 0], "disks": [5, 3, 0], "span": [0.04, 0.03, 0.0],
+                       "x": [[-0.02, -0.01, 0.0, 0.01, 0.02], [-0.01, 0.0, 0.01], []],
                        "y": [[0.0, 0.005, 0.002, 0.004, 0.001], [0.0, 0.01, 0.0], []]})
 store = Store.from_frames("synthetic", {"points": pts, "survival": survival,
                                         "realizations": realizations, "arches": arches})
@@ -74,11 +79,27 @@ check(abs(p3["arch_mean_size"] - 4.0) < 1e-12, "mean arch size 4: %s" % p3["arch
 check(p3["arch_size_counts"] == {3: 1, 5: 1}, "size counts: %s" % p3["arch_size_counts"])
 check(abs(p3["aspect_mean"] - 3.0) < 1e-12 and abs(p3["aspect_se"] - 1.0) < 1e-12,
       "span/height 3 +- 1: %s +- %s" % (p3["aspect_mean"], p3["aspect_se"]))
+check(abs(p3["height_over_half_span"] - 0.6125) < 1e-12 and
+      abs(p3["height_over_half_span_se"] - 0.3875) < 1e-12,
+      "height/half-span 0.6125 +- 0.3875: %s +- %s" % (p3["height_over_half_span"],
+                                                      p3["height_over_half_span_se"]))
 p5 = res[4]
 # No clog: <s> unknown; 95 % one-sided lower bound T / (-ln 0.05) = 900 / 2.9957.
 check(p5["mean_s"] is None and abs(p5["lo"] - 900.0 / -math.log(0.05)) < 1e-9,
       "bound without a clog: %s" % p5["lo"])
 check(res[0]["arch_mean_size"] is None and res[0]["arch_jams"] == 0, "no arches at D/d 2")
+
+# Leaving out each realization's first avalanche (r0: 10, r1: 30, both clogs): 1 clog, 40
+# grains in the rest (20 + 5 censored + 15 censored); the first ones apart: 2 clogs, <s> 20.
+sk = silo_validation.summarize_store(store, "synthetic", skip_first=True)[1]
+check(sk["clogs"] == 1 and sk["grains"] == 40.0 and abs(sk["mean_s"] - 40.0) < 1e-12,
+      "without the first avalanches: %s" % {k: sk[k] for k in ("clogs", "grains", "mean_s")})
+check(sk["first"]["clogs"] == 2 and abs(sk["first"]["mean_s"] - 20.0) < 1e-12,
+      "first avalanches apart: %s" % sk["first"])
+check(sk["arch_jams"] == 3, "every clog's arch counts with skip_first")
+check("first" not in p3, "no 'first' without skip_first")
+md = silo_validation.table("t", silo_validation.summarize_store(store, "synthetic", True))
+check("first avalanches" in md and "| 3.00 | 2 | 1 | 40 +- 40" in md, "table:\n" + md)
 
 f = silo_validation.fit(res)
 check(f is not None, "a fit over three outlets")
