@@ -13,7 +13,9 @@ outlets with at least 5 clogs; a and b with their standard errors and the reduce
 The arch-removal store's <s> leaves out each realization's first avalanche, the one from the
 settled fill to the first clog (the experiments discard it too: a settled packing is not the
 steady flow), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
-ones too ("arches found / all clogs"). A refill realization is one first avalanche.
+ones too ("arches found / all clogs"). A refill realization is one first avalanche. With both
+stores, the protocol effect per outlet in both: arch removal's <s> over refill's, and its first
+avalanches over refill's (the same start from a settled fill), each with the z of the log.
 Arch height: the top of the arch's highest disk above the outlet plane (y_i + d/2); span: the
 distance between the arch's two contacts with the wall disks (docs/model.md, step 9).
 
@@ -164,6 +166,41 @@ def table(name, rows):
     return "\n".join(out) + "\n"
 
 
+def z_log(a, b):
+    """ln(<s>_a / <s>_b) and its z (the standard error of ln <s> is 1 / sqrt(clogs)), or None."""
+    if not a or not b or a["mean_s"] is None or b["mean_s"] is None:
+        return None
+    lr = math.log(a["mean_s"] / b["mean_s"])
+    return {"ratio": a["mean_s"] / b["mean_s"], "ln_ratio": lr,
+            "z": lr / math.hypot(1 / math.sqrt(a["clogs"]), 1 / math.sqrt(b["clogs"]))}
+
+
+def protocol_effect(remove_arch, refill):
+    """Per outlet in both stores: arch removal's steady <s> over refill's, and the arch-removal
+    realizations' first avalanches against refill's (the same start, a settled fill: they
+    should agree)."""
+    out = []
+    for f in refill:
+        match = [r for r in remove_arch if abs(r["D_over_d"] - f["D_over_d"]) < 1e-6]
+        if not match:
+            continue
+        r = match[0]
+        out.append({"D_over_d": f["D_over_d"], "steady_over_refill": z_log(r, f),
+                    "first_over_refill": z_log(r.get("first"), f)})
+    return out
+
+
+def effect_table(effects):
+    out = ["### The protocol's effect", "",
+           "| D/d | arch removal / refill: <s> ratio (z of its log) |"
+           " first avalanches of arch removal / refill (z) |", "|---|---|---|"]
+    for e in effects:
+        cells = ["%.3g (z = %+.2f)" % (x["ratio"], x["z"]) if x else "-"
+                 for x in (e["steady_over_refill"], e["first_over_refill"])]
+        out.append("| %.2f | %s | %s |" % (e["D_over_d"], cells[0], cells[1]))
+    return "\n".join(out) + "\n"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("remove_arch")
@@ -180,6 +217,7 @@ def main():
     result["fit_remove_arch"] = fit(result["remove_arch"])
     if args.refill:
         result["refill"] = summarize(args.refill)
+        result["protocol_effect"] = protocol_effect(result["remove_arch"], result["refill"])
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "silo_validation.json"), "w") as fh:
         json.dump(result, fh, indent=1)
@@ -193,6 +231,7 @@ def main():
                    else float("nan")))
     if args.refill:
         md += "\n" + table("Refill after each clog", result["refill"])
+        md += "\n" + effect_table(result["protocol_effect"])
     with open(os.path.join(args.out, "silo_validation.md"), "w") as fh:
         fh.write(md)
     print(md)

@@ -5,7 +5,7 @@ grains, its chi-square interval, the lower bound of an outlet with no clog, the 
 share, mean size, span / height), and the weighted fit ln(<s>+1) = a + b (D/d)^2 over the
 outlets with at least 5 clogs, recovered exactly from points that lie on a line; each
 realization's first avalanche left out and reported apart (skip_first), the arches' height over
-half-span of their centres.
+half-span of their centres, and the protocol effect (ratios of <s> with the z of their logs).
 
 usage: test_silo_validation.py SOURCE_DIR   (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
 """
@@ -100,6 +100,22 @@ check(sk["arch_jams"] == 3, "every clog's arch counts with skip_first")
 check("first" not in p3, "no 'first' without skip_first")
 md = silo_validation.table("t", silo_validation.summarize_store(store, "synthetic", True))
 check("first avalanches" in md and "| 3.00 | 2 | 1 | 40 +- 40" in md, "table:\n" + md)
+
+# The protocol's effect, this store as both: arch removal without first avalanches (<s> 40, 1
+# clog) over all of it (80/3, 3 clogs): ratio 1.5, z = ln 1.5 / sqrt(1 + 1/3); the first
+# avalanches (20, 2 clogs) over it: 0.75, z = ln 0.75 / sqrt(1/2 + 1/3). No clog: no ratio.
+eff = silo_validation.protocol_effect(
+    silo_validation.summarize_store(store, "synthetic", True), res)
+e3 = [e for e in eff if abs(e["D_over_d"] - 3) < 1e-9][0]
+check(abs(e3["steady_over_refill"]["ratio"] - 1.5) < 1e-12 and
+      abs(e3["steady_over_refill"]["z"] - math.log(1.5) / math.sqrt(4 / 3)) < 1e-12,
+      "steady over refill: %s" % e3["steady_over_refill"])
+check(abs(e3["first_over_refill"]["ratio"] - 0.75) < 1e-12 and
+      abs(e3["first_over_refill"]["z"] - math.log(0.75) / math.sqrt(5 / 6)) < 1e-12,
+      "first over refill: %s" % e3["first_over_refill"])
+e5 = [e for e in eff if abs(e["D_over_d"] - 5) < 1e-9][0]
+check(e5["steady_over_refill"] is None, "no ratio without a clog")
+check(len(eff) == 5, "one row per outlet in both")
 
 f = silo_validation.fit(res)
 check(f is not None, "a fit over three outlets")
