@@ -11,8 +11,8 @@ found, the mean aspect ratio span / height), for both protocols. The fit
 ln(<s> + 1) = a + b (D/d)^2 is weighted least squares with sigma_i = se_i / (<s>_i + 1), over the
 outlets with at least 5 clogs; a and b with their standard errors and the reduced chi-square.
 The arch-removal store's <s> leaves out each realization's first avalanche, the one from the
-settled fill to the first clog (the experiments discard it too: a settled packing is not the
-steady flow), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
+settled fill to the first clog (a settled packing is not the steady flow the protocol is
+about), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
 ones too ("arches found / all clogs"). A refill realization is one first avalanche. With both
 stores, the protocol effect per outlet in both: arch removal's <s> over refill's, and its first
 avalanches over refill's (the same start from a settled fill), each with the z of the log.
