@@ -137,12 +137,26 @@ RoundState replay_rounds(const config::CampaignSpec& spec,
 std::string describe_rounds(const RoundState& s, config::CampaignTarget::Quantity quantity) {
     std::ostringstream out;
     const char* name = quantity == config::CampaignTarget::Quantity::tau ? "tau (s)" : "<s>";
-    for (const auto& p : s.points) {
+    for (std::size_t i = 0; i < s.points.size(); ++i) {
+        const PointRounds& p = s.points[i];
         out << "  " << p.label << ": " << p.allotted << " realizations";
         if (p.precision.has_estimate)
             out << ", " << name << " = " << num(p.precision.estimate) << " +- "
                 << percent(p.precision.rel_half_width);
-        out << "; " << (p.why.empty() ? "first round running" : p.why) << '\n';
+        out << "; ";
+        if (!p.why.empty()) {
+            out << p.why << '\n';
+            continue;
+        }
+        // Still in the first round: say how much of it is stored, so that a point whose
+        // first round is complete does not read as running.
+        const auto missing = std::count_if(s.missing.begin(), s.missing.end(),
+                                           [&](const auto& m) { return m.first == int(i); });
+        if (missing == 0)
+            out << "first round stored; decided when every point's first round is\n";
+        else
+            out << "first round running (" << p.allotted - missing << " of " << p.allotted
+                << " stored)\n";
     }
     return out.str();
 }

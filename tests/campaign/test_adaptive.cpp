@@ -128,6 +128,23 @@ TEST(Adaptive, CheapestInformationFirstWithinARound) {
     EXPECT_EQ(s.missing[3].first, 0);
 }
 
+TEST(Adaptive, TheFirstRoundSaysHowMuchOfItIsStored) {
+    // Point A has its first round (2) stored, B 1 of 2: A waits for B's, B runs.
+    const auto spec =
+        spec_of("realizations = 2\ntarget = \"tau\"\ntarget_rel_ci = 0.1\nmax_realizations = 40",
+                "D_cm = [2.0, 2.5]");
+    const std::string a = spec.points[0].label, b = spec.points[1].label;
+    const auto s = replay_rounds(spec, {{a, first_n(2)}, {b, first_n(1)}}, {1.0, 1.0});
+    const std::string text = campaign::describe_rounds(s, config::CampaignTarget::Quantity::tau);
+    EXPECT_NE(text.find(a + ": 2 realizations; first round stored; decided when every point's "
+                            "first round is"),
+              std::string::npos)
+        << text;
+    EXPECT_NE(text.find(b + ": 2 realizations; first round running (1 of 2 stored)"),
+              std::string::npos)
+        << text;
+}
+
 std::string sweep_error(const std::string& keys) {
     try {
         spec_of("realizations = 2\n" + keys, "D_cm = [2.0]");
