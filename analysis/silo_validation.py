@@ -9,7 +9,9 @@ as `campaign analyze`, docs/statistics.md), <s> = grains / clogs with its standa
 <s>/sqrt(clogs) and 95 % chi-square interval, the arches at the clogs (size in disks, the share
 found, the mean aspect ratio span / height), for both protocols. The fit
 ln(<s> + 1) = a + b (D/d)^2 is weighted least squares with sigma_i = se_i / (<s>_i + 1), over the
-outlets with at least 5 clogs; a and b with their standard errors and the reduced chi-square.
+outlets with at least 5 clogs; a and b with their standard errors and the reduced chi-square;
+with 4 or more such outlets also the critical alternative ln(<s>+1) = ln A - gamma ln(R_c - D/d)
+(a finite outlet R_c beyond which nothing clogs) and the AIC verdict between the two.
 The arch-removal store's <s> leaves out each realization's first avalanche, the one from the
 settled fill to the first clog (a settled packing is not the steady flow the protocol is
 about), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
@@ -20,7 +22,9 @@ Arch height: the top of the arch's highest disk above the outlet plane (y_i + d/
 distance between the arch's two contacts with the wall disks (docs/model.md, step 9).
 
 Writes DIR/silo_validation.json, DIR/silo_validation.md (the tables) and DIR/silo_validation.png
-(ln(<s>+1) against (D/d)^2 with the fit; the arch size distributions per D/d).
+(ln(<s>+1) against (D/d)^2 with the fit; the arch size distributions per D/d). Per outlet also
+the shape of the avalanche sizes: coefficient of variation and Kolmogorov-Smirnov p against an
+exponential (the literature finds exponential sizes at every outlet).
 """
 import argparse
 import json
@@ -61,6 +65,16 @@ def interval_stats(sv):
     else:
         row.update({"mean_s": None, "se": None,
                     "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
+    # The shape: the literature finds exponential avalanche sizes at every outlet. Of the
+    # completed avalanches (censored ones left out), with 10 or more: the coefficient of
+    # variation (1 for an exponential) and the Kolmogorov-Smirnov p-value against the
+    # exponential of their mean (approximate: the mean is fitted, which makes it conservative).
+    done = sv[sv["event"] == 1]["avalanche_size"].to_numpy(float)
+    if len(done) >= 10 and done.mean() > 0:
+        row["cv"] = float(done.std(ddof=1) / done.mean())
+        row["ks_p"] = float(stats.kstest(done, "expon", args=(0, done.mean())).pvalue)
+    else:
+        row["cv"] = row["ks_p"] = None
     return row
 
 
@@ -128,10 +142,34 @@ def fit(rows):
     cov = np.linalg.inv(X.T @ (w[:, None] * X))
     a, b = cov @ (X.T @ (w * y))
     chi2 = float(np.sum(w * (y - a - b * x) ** 2))
-    return {"a": float(a), "a_err": float(math.sqrt(cov[0, 0])), "b": float(b),
-            "b_err": float(math.sqrt(cov[1, 1])), "cov_ab": float(cov[0, 1]),
-            "chi2_reduced": chi2 / (len(use) - 2) if len(use) > 2 else None,
-            "outlets": [r["D_over_d"] for r in use]}
+    out = {"a": float(a), "a_err": float(math.sqrt(cov[0, 0])), "b": float(b),
+           "b_err": float(math.sqrt(cov[1, 1])), "cov_ab": float(cov[0, 1]),
+           "chi2_reduced": chi2 / (len(use) - 2) if len(use) > 2 else None,
+           "outlets": [r["D_over_d"] for r in use]}
+    out["critical"] = critical_fit(np.sqrt(x), y, w, chi2)
+    return out
+
+
+def critical_fit(R, y, w, chi2_exp):
+    """The alternative of a critical outlet R_c (D/d) beyond which nothing clogs:
+    ln(<s>+1) = ln A - gamma ln(R_c - R), weighted as the exponential fit; R_c scanned on a grid
+    above the largest outlet (each R_c a linear fit), the least chi-square kept. AIC = chi2 +
+    2 k (k = 2 exponential, 3 critical); a difference under 2 decides nothing. Needs 4 outlets."""
+    if len(R) < 4:
+        return None
+    best = None
+    for rc in R.max() + np.geomspace(1e-3, 50.0, 4000):
+        X = np.vstack([np.ones_like(R), -np.log(rc - R)]).T
+        cov = np.linalg.inv(X.T @ (w[:, None] * X))
+        c0, g = cov @ (X.T @ (w * y))
+        c2 = float(np.sum(w * (y - c0 - g * X[:, 1]) ** 2))
+        if best is None or c2 < best[0]:
+            best = (c2, float(rc), float(g), float(c0))
+    c2, rc, g, c0 = best
+    d_aic = (c2 + 6) - (chi2_exp + 4)
+    return {"R_c": rc, "gamma": g, "ln_A": c0, "chi2": c2, "chi2_exponential": chi2_exp,
+            "aic_critical_minus_exponential": d_aic,
+            "verdict": "exponential" if d_aic > 2 else "critical" if d_aic < -2 else "undecided"}
 
 
 def mean_s_text(r):
@@ -146,8 +184,8 @@ def table(name, rows):
            "| D/d | realizations | clogs | <s> +- se [95 % CI] |" +
            (" first avalanches: clogs, <s> +- se |" if first else "") +
            " arches found / all clogs | mean arch size (disks) | span / height +- se |"
-           " height / half-span +- se |",
-           "|---|---|---|---|" + ("---|" if first else "") + "---|---|---|---|"]
+           " height / half-span +- se | sizes: CV, KS p (exponential) |",
+           "|---|---|---|---|" + ("---|" if first else "") + "---|---|---|---|---|"]
     for r in rows:
         if r["realizations"] == 0:
             out.append("| %.2f | 0 | not run yet |" % r["D_over_d"])
@@ -157,12 +195,13 @@ def table(name, rows):
             q = r["first"]
             f = " %d, %s |" % (q["clogs"], "%.3g +- %.2g" % (q["mean_s"], q["se"])
                                if q["mean_s"] is not None else mean_s_text(q))
-        out.append("| %.2f | %d | %d | %s |%s %d / %d | %s | %s | %s |" % (
+        out.append("| %.2f | %d | %d | %s |%s %d / %d | %s | %s | %s | %s |" % (
             r["D_over_d"], r["realizations"], r["clogs"], mean_s_text(r), f, r["arches_found"],
             r["arch_jams"], "%.2f" % r["arch_mean_size"] if r["arch_mean_size"] is not None else "-",
             "%.2f +- %.2f" % (r["aspect_mean"], r["aspect_se"]) if r["aspect_se"] else "-",
             "%.2f +- %.2f" % (r["height_over_half_span"], r["height_over_half_span_se"])
-            if r["height_over_half_span_se"] else "-"))
+            if r["height_over_half_span_se"] else "-",
+            "%.2f, %.2g" % (r["cv"], r["ks_p"]) if r["cv"] is not None else "-"))
     return "\n".join(out) + "\n"
 
 
@@ -229,6 +268,12 @@ def main():
                    ", ".join("%.2f" % v for v in f["outlets"]), f["a"], f["a_err"], f["b"],
                    f["b_err"], f["cov_ab"], f["chi2_reduced"] if f["chi2_reduced"] is not None
                    else float("nan")))
+        c = f["critical"]
+        if c:
+            md += ("Critical alternative ln(<s>+1) = ln A - gamma ln(R_c - D/d): R_c = %.3g, "
+                   "gamma = %.3g, chi-square %.2f against %.2f; AIC(critical) - AIC(exponential) "
+                   "= %+.2f: %s\n" % (c["R_c"], c["gamma"], c["chi2"], c["chi2_exponential"],
+                                       c["aic_critical_minus_exponential"], c["verdict"]))
     if args.refill:
         md += "\n" + table("Refill after each clog", result["refill"])
         md += "\n" + effect_table(result["protocol_effect"])

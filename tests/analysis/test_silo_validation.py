@@ -5,7 +5,9 @@ grains, its chi-square interval, the lower bound of an outlet with no clog, the 
 share, mean size, span / height), and the weighted fit ln(<s>+1) = a + b (D/d)^2 over the
 outlets with at least 5 clogs, recovered exactly from points that lie on a line; each
 realization's first avalanche left out and reported apart (skip_first), the arches' height over
-half-span of their centres, and the protocol effect (ratios of <s> with the z of their logs).
+half-span of their centres, the protocol effect (ratios of <s> with the z of their logs), and
+the size distribution's shape (coefficient of variation, KS p against an exponential), and the
+critical alternative to the exponential fit (R_c, gamma, AIC verdict).
 
 usage: test_silo_validation.py SOURCE_DIR   (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
 """
@@ -117,6 +119,23 @@ e5 = [e for e in eff if abs(e["D_over_d"] - 5) < 1e-9][0]
 check(e5["steady_over_refill"] is None, "no ratio without a clog")
 check(len(eff) == 5, "one row per outlet in both")
 
+# The size distribution's shape (10 or more completed avalanches): 12 equal sizes are no
+# exponential (CV 0, KS distance 1 - e^-1 = 0.63); 40 at the exponential's quantiles are (CV
+# near 1, a large p); a censored interval does not count; fewer than 10: none.
+def iv(sizes, censored=()):
+    return pd.DataFrame({"event": [1] * len(sizes) + [0] * len(censored),
+                         "avalanche_size": list(sizes) + list(censored)})
+
+
+q = silo_validation.interval_stats(iv([10.0] * 12, [1e6]))
+check(q["cv"] == 0.0 and q["ks_p"] < 1e-3, "equal sizes: %s %s" % (q["cv"], q["ks_p"]))
+check(abs(stats.kstest([10.0] * 12, "expon", args=(0, 10.0)).statistic - (1 - math.exp(-1)))
+      < 1e-12, "KS distance of equal sizes")
+ex = [-50 * math.log(1 - (i + 0.5) / 40) for i in range(40)]
+q = silo_validation.interval_stats(iv(ex))
+check(abs(q["cv"] - 1) < 0.15 and q["ks_p"] > 0.5, "exponential sizes: %s %s" % (q["cv"], q["ks_p"]))
+check(silo_validation.interval_stats(iv([10.0] * 9))["cv"] is None, "no shape under 10")
+
 f = silo_validation.fit(res)
 check(f is not None, "a fit over three outlets")
 if f is not None:
@@ -125,6 +144,22 @@ if f is not None:
     check(abs(f["a"] - A) < 1e-9 and abs(f["b"] - B) < 1e-9, "a, b = %s, %s" % (f["a"], f["b"]))
     check(f["chi2_reduced"] < 1e-12, "points on the line: chi2 %s" % f["chi2_reduced"])
     check(f["b_err"] > 0 and f["a_err"] > 0, "errors of a and b")
+    check(f["critical"] is None, "no critical fit over three outlets")
+# The critical alternative over 5 outlets: points on ln A - gamma ln(R_c - R) with R_c = 6,
+# gamma = 3 are found again (grid resolution) and preferred by AIC; points on the exponential
+# line are not (its AIC is lower by more than 2 with these weights).
+Rs = [3.0, 3.5, 4.0, 4.5, 5.0]
+import numpy as np  # noqa: E402
+c = silo_validation.critical_fit(np.array(Rs), np.array([2 - 3 * math.log(6 - r) for r in Rs]),
+                                 np.full(5, 100.0), 50.0)
+check(abs(c["R_c"] - 6) < 0.01 and abs(c["gamma"] - 3) < 0.01 and c["verdict"] == "critical",
+      "critical data: %s" % c)
+c = silo_validation.critical_fit(np.array(Rs), np.array([A + B * r * r for r in Rs]),
+                                 np.full(5, 100.0), 0.0)
+check(c["verdict"] == "exponential" and c["aic_critical_minus_exponential"] > 2,
+      "exponential data: %s" % c)
+check(silo_validation.critical_fit(np.array(Rs[:3]), np.zeros(3), np.ones(3), 0.0) is None,
+      "no critical fit under 4 outlets")
 # Two outlets with enough clogs are no fit.
 check(silo_validation.fit([r for r in res if r["D_over_d"] != 4.5]) is None,
       "no fit over two outlets")
