@@ -5,6 +5,10 @@ usage:
   clogging.py arrests STORE.h5 [--json OUT]
       realizations by status, and tau and jams per realization for all realizations, for those
       in which every jam cleared at the first shake (no grown shake) and for the others
+  clogging.py levels PUBLISHED.h5 [--bins 0,300,700,...] [--json OUT]
+      the published protocol's tau by fill level: per bin of particles in the hopper, the
+      flowing time spent there (discharge curve) and the jams whose onset fell there; what a
+      steady state of that many particles is to be compared with
   clogging.py heads PUBLISHED.h5 STEADY.h5 [--ns-per-particle-step LABEL=NS ...] [--json OUT]
       per point of both stores: jams, tau [95 % CI], <s> +- se, particle-steps per jam (the
       work, independent of the machine's load) and, where a point's CPU cost per particle-step
@@ -256,6 +260,68 @@ def heads(published, steady, ns_args, out):
             json.dump({"published": ref, "steady_state": rows}, fh, indent=1)
 
 
+def fill_levels(s, bins):
+    """The published protocol's jam rate by fill level (particles in the hopper): per bin
+    [bins[i], bins[i+1]), the flowing time the realizations spent there and the jams whose onset
+    fell there, tau = time / jams (censored_mean's interval). A survival interval ended by a jam
+    spans [onset - duration, onset] on the discharge curve's clock (which also holds each jam's
+    detection window, outside every interval); a realization's last, censored interval ends at
+    the curve's last sample. in_hopper is the curve's sample at or before a moment."""
+    curves, jams, surv = s.curves, s.jams, s.survival
+    nb = len(bins) - 1
+    time = np.zeros(nb)
+    count = np.zeros(nb, int)
+    bad = 0
+    for (pt, r), sv in surv.groupby(["point", "realization"]):
+        cc = curves[(curves["point"] == pt) & (curves["realization"] == r)]
+        if len(cc) < 2:
+            continue
+        t = cc["time"].to_numpy(float)
+        n = cc["in_hopper"].to_numpy(float)
+        level = np.digitize(n[:-1], bins) - 1  # of each segment [t[k], t[k+1])
+        onsets = np.sort(jams[(jams["point"] == pt) & (jams["realization"] == r)]["onset"]
+                         .to_numpy(float))
+        sv = sv.sort_values("interval")
+        ends = list(onsets[:int(sv["event"].sum())])
+        if not sv["event"].iloc[-1]:
+            ends.append(t[-1])
+        if len(ends) != len(sv):
+            bad += 1
+            continue
+        for end, dur in zip(ends, sv["duration"].to_numpy(float)):
+            a, b = end - dur, end
+            overlap = np.clip(np.minimum(b, t[1:]) - np.maximum(a, t[:-1]), 0, None)
+            for i in range(nb):
+                time[i] += overlap[level == i].sum()
+        for o in onsets:
+            k = max(int(np.searchsorted(t, o, side="right")) - 1, 0)
+            i = int(np.digitize([n[k]], bins)[0]) - 1
+            if 0 <= i < nb:
+                count[i] += 1
+    rows = []
+    for i in range(nb):
+        e = censored_mean([time[i]], [count[i]])
+        rows.append({"from": bins[i], "to": bins[i + 1], "flow_time": float(time[i]),
+                     "jams": int(count[i]), "tau": e})
+    return {"levels": rows, "realizations_skipped": bad}
+
+
+def levels(path, bins, out):
+    with open_store(path) as s:
+        result = fill_levels(s, bins)
+    print("%s: jams by particles in the hopper at their onset" % path)
+    print("%-14s %10s %5s  %s" % ("in hopper", "flow (s)", "jams", "tau (s) +- se [95% CI]"))
+    for row in result["levels"]:
+        print("%-14s %10.1f %5d  %s" % ("%d-%d" % (row["from"], row["to"]), row["flow_time"],
+                                       row["jams"], fmt(row["tau"])))
+    if result["realizations_skipped"]:
+        print("skipped %d realization(s) whose jams and intervals do not match"
+              % result["realizations_skipped"])
+    if out:
+        with open(out, "w") as fh:
+            json.dump(result, fh, indent=1)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -267,12 +333,27 @@ def main():
     h.add_argument("steady")
     h.add_argument("--ns-per-particle-step", nargs="*", metavar="LABEL=NS")
     h.add_argument("--json")
+    lv = sub.add_parser("levels")
+    lv.add_argument("store")
+    lv.add_argument("--bins", default="0,300,700,1500,3000,5000,9000",
+                    help="fill-level bin edges, particles in the hopper (default %(default)s)")
+    lv.add_argument("--json")
     args = ap.parse_args()
     for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)]:
         if not os.path.exists(p):
             sys.exit("clogging.py: no such store: %s" % p)
     if args.cmd == "arrests":
         arrests(args.store, args.json)
+    elif args.cmd == "levels":
+        try:
+            bins = [float(v) for v in args.bins.split(",")]
+        except ValueError:
+            sys.exit("clogging.py levels: --bins must be numbers separated by commas, got %r"
+                     % args.bins)
+        if len(bins) < 2 or any(b <= a for a, b in zip(bins, bins[1:])):
+            sys.exit("clogging.py levels: --bins must be two or more increasing edges, got %r"
+                     % args.bins)
+        levels(args.store, bins, args.json)
     else:
         heads(args.published, args.steady, args.ns_per_particle_step, args.json)
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""analysis/clogging.py arrests on a synthetic store (hopper_store.Store.from_frames) whose
+"""analysis/clogging.py arrests and levels on synthetic stores (hopper_store.Store.from_frames) whose
 answers are known by hand (issue 23): arrests counted by status, tau (censored mean: flow time /
 jams) and jams per realization by group, and tau per interval after an ordinary shake and after
 a grown one, the comparison that does not select realizations by their number of jams.
@@ -69,6 +69,28 @@ check(iv["after a grown shake"]["intervals"] == 1 and
       "tau after a grown shake: %s" % iv.get("after a grown shake"))
 se = math.hypot(iv["after one shake"]["tau"]["se"], iv["after a grown shake"]["tau"]["se"])
 check(abs(r["z_tau_after_shake"] - (2.0 - 9.0) / se) < 1e-9, "z per interval")
+
+# Fill levels: one realization whose curve holds 1000, 800, 500, 200 particles on [0,1), [1,2),
+# [2,3), [3,4) and 0 at t = 4; jams at t = 1.5 (interval of 1.5 s: [0, 1.5]) and 3.5 (1.9 s:
+# [1.6, 3.5]; 1.5-1.6 is the detection window), then 0.4 s censored ([3.6, 4]). Bins 0, 300,
+# 700, 1500: 700-1500 gets 1.0 + 0.5 + 0.4 = 1.9 s and the jam at 1.5 (800 in the hopper);
+# 300-700 1.0 s, no jam; 0-300 0.5 + 0.4 = 0.9 s and the jam at 3.5 (200).
+curves = pd.DataFrame({"point": [0] * 5, "realization": [0] * 5,
+                       "time": [0.0, 1.0, 2.0, 3.0, 4.0], "in_hopper": [1000, 800, 500, 200, 0]})
+lv_store = Store.from_frames("levels", {
+    "survival": pd.DataFrame({"point": [0] * 3, "realization": [0] * 3, "interval": [0, 1, 2],
+                              "duration": [1.5, 1.9, 0.4], "event": [1, 1, 0]}),
+    "jams": pd.DataFrame({"point": [0, 0], "realization": [0, 0], "onset": [1.5, 3.5],
+                          "shakes": [1, 1]}),
+    "curves": curves, "points": pd.DataFrame(), "realizations": pd.DataFrame()})
+lv = clogging.fill_levels(lv_store, [0, 300, 700, 1500])["levels"]
+want = [(0.9, 1), (1.0, 0), (1.9, 1)]
+for row, (t, k) in zip(lv, want):
+    check(abs(row["flow_time"] - t) < 1e-12 and row["jams"] == k,
+          "level %s-%s: %s s, %s jams (want %s, %s)" % (row["from"], row["to"], row["flow_time"],
+                                                         row["jams"], t, k))
+check(abs(lv[2]["tau"]["mean"] - 1.9) < 1e-12 and lv[1]["tau"]["mean"] is None,
+      "tau by level: %s" % [row["tau"]["mean"] for row in lv])
 
 print("clogging: %d failed" % len(failures))
 sys.exit(1 if failures else 0)
