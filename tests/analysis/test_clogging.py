@@ -16,18 +16,14 @@ try:
 except ImportError:
     sys.exit(77)
 
-SRC = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
-sys.path.insert(0, os.path.join(SRC, "analysis"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hand_checks import Checks, analysis_on_path  # noqa: E402
+
+analysis_on_path()
 import clogging  # noqa: E402
 from hopper_store import Store  # noqa: E402
 
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL: " + what)
+check = Checks("clogging")
 
 
 # Realization 0: two jams, each cleared by one shake; intervals 2 s, 3 s, then 5 s censored.
@@ -92,5 +88,4 @@ for row, (t, k) in zip(lv, want):
 check(abs(lv[2]["tau"]["mean"] - 1.9) < 1e-12 and lv[1]["tau"]["mean"] is None,
       "tau by level: %s" % [row["tau"]["mean"] for row in lv])
 
-print("clogging: %d failed" % len(failures))
-sys.exit(1 if failures else 0)
+check.finish()

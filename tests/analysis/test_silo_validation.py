@@ -21,18 +21,14 @@ try:
 except ImportError:
     sys.exit(77)
 
-SRC = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
-sys.path.insert(0, os.path.join(SRC, "analysis"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hand_checks import Checks, analysis_on_path  # noqa: E402
+
+analysis_on_path()
 import silo_validation  # noqa: E402
 from hopper_store import Store  # noqa: E402
 
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL: " + what)
+check = Checks("silo_validation")
 
 
 d = 0.01  # m
@@ -164,5 +160,4 @@ check(silo_validation.critical_fit(np.array(Rs[:3]), np.zeros(3), np.ones(3), 0.
 check(silo_validation.fit([r for r in res if r["D_over_d"] != 4.5]) is None,
       "no fit over two outlets")
 
-print("silo_validation: %d failed" % len(failures))
-sys.exit(1 if failures else 0)
+check.finish()
