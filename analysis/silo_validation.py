@@ -16,8 +16,9 @@ The arch-removal store's <s> leaves out each realization's first avalanche, the 
 settled fill to the first clog (a settled packing is not the steady flow the protocol is
 about), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
 ones too ("arches found / all clogs"). A refill realization is one first avalanche. With both
-stores, the protocol effect per outlet in both: arch removal's <s> over refill's, and its first
-avalanches over refill's (the same start from a settled fill), each with the z of the log.
+stores, the protocol effect per outlet in both: arch removal's <s> over refill's with the z of
+the log, and the realizations of the same seed, whose first avalanches must be equal (the same
+fill, and both protocols run alike until the first clog).
 Arch height: the top of the arch's highest disk above the outlet plane (y_i + d/2); span: the
 distance between the arch's two contacts with the wall disks (docs/model.md, step 9).
 
@@ -99,6 +100,12 @@ def summarize_store(s, path, skip_first=False):
             row["first"] = interval_stats(sv[sv["interval"] == 0])
         else:
             row.update(interval_stats(sv))
+        # Each realization's first avalanche by seed (size, duration), for the check that two
+        # protocols given the same seed flow alike until their first clog.
+        seeds = dict(zip(r[r["point"] == i]["realization"], r[r["point"] == i]["seed_str"]))
+        row["first_by_seed"] = {
+            str(seeds[x.realization]): [float(x.avalanche_size), float(x.duration)]
+            for x in sv[sv["interval"] == 0].itertuples() if x.realization in seeds}
         a = arches[arches["point"] == i]
         found = a[a["disks"] > 0]
         sizes = found["disks"].to_numpy(int)
@@ -215,9 +222,9 @@ def z_log(a, b):
 
 
 def protocol_effect(remove_arch, refill):
-    """Per outlet in both stores: arch removal's steady <s> over refill's, and the arch-removal
-    realizations' first avalanches against refill's (the same start, a settled fill: they
-    should agree)."""
+    """Per outlet in both stores: arch removal's steady <s> over refill's, and the realizations
+    of the two with the same seed (the same fill): their first avalanches must be equal, size
+    and duration, as both protocols run alike until the first clog."""
     out = []
     for f in refill:
         match = [r for r in remove_arch if abs(r["D_over_d"] - f["D_over_d"]) < 1e-6]
@@ -225,18 +232,25 @@ def protocol_effect(remove_arch, refill):
             continue
         r = match[0]
         out.append({"D_over_d": f["D_over_d"], "steady_over_refill": z_log(r, f),
-                    "first_over_refill": z_log(r.get("first"), f)})
+                    "same_seed": same_seed(r["first_by_seed"], f["first_by_seed"])})
     return out
+
+
+def same_seed(a, b):
+    both = sorted(set(a) & set(b))
+    return {"pairs": len(both), "equal": sum(1 for k in both if a[k] == b[k]),
+            "differ": [k for k in both if a[k] != b[k]]}
 
 
 def effect_table(effects):
     out = ["### The protocol's effect", "",
            "| D/d | arch removal / refill: <s> ratio (z of its log) |"
-           " first avalanches of arch removal / refill (z) |", "|---|---|---|"]
+           " same seed: first avalanches equal |", "|---|---|---|"]
     for e in effects:
-        cells = ["%.3g (z = %+.2f)" % (x["ratio"], x["z"]) if x else "-"
-                 for x in (e["steady_over_refill"], e["first_over_refill"])]
-        out.append("| %.2f | %s | %s |" % (e["D_over_d"], cells[0], cells[1]))
+        x, q = e["steady_over_refill"], e["same_seed"]
+        out.append("| %.2f | %s | %d of %d |" % (
+            e["D_over_d"], "%.3g (z = %+.2f)" % (x["ratio"], x["z"]) if x else "-",
+            q["equal"], q["pairs"]))
     return "\n".join(out) + "\n"
 
 

@@ -5,7 +5,8 @@ grains, its chi-square interval, the lower bound of an outlet with no clog, the 
 share, mean size, span / height), and the weighted fit ln(<s>+1) = a + b (D/d)^2 over the
 outlets with at least 5 clogs, recovered exactly from points that lie on a line; each
 realization's first avalanche left out and reported apart (skip_first), the arches' height over
-half-span of their centres, the protocol effect (ratios of <s> with the z of their logs), and
+half-span of their centres, the protocol effect (ratios of <s> with the z of their logs; the
+same seeds' first avalanches equal, a differing one named), and
 the size distribution's shape (coefficient of variation, KS p against an exponential), and the
 critical alternative to the exponential fit (R_c, gamma, AIC verdict).
 
@@ -49,7 +50,9 @@ for p, r_ in ((1, 2.0), (2, 4.0), (3, 4.5)):
 rows.append((4, 0, 0, 0, 900.0))
 survival = pd.DataFrame(rows, columns=["point", "realization", "interval", "event",
                                        "avalanche_size"])
-realizations = pd.DataFrame({"point": [0, 0, 1, 2, 3, 4], "realization": [0, 1, 0, 0, 0, 0]})
+survival["duration"] = survival["avalanche_size"] / 100.0  # s; only compared between stores
+realizations = pd.DataFrame({"point": [0, 0, 1, 2, 3, 4], "realization": [0, 1, 0, 0, 0, 0],
+                             "seed_str": ["s1", "s2", "s3", "s4", "s5", "s6"]})
 # Arches of point 0: two found (5 disks: span 0.04 m, highest centre 0.005 m -> height 0.01 m,
 # ratio 4; 3 disks: span 0.03 m, highest centre 0.01 m -> height 0.015 m, ratio 2), one jam with
 # no arch found (0 disks), which counts in arch_jams only.
@@ -100,17 +103,26 @@ md = silo_validation.table("t", silo_validation.summarize_store(store, "syntheti
 check("first avalanches" in md and "| 3.00 | 2 | 1 | 40 +- 40" in md, "table:\n" + md)
 
 # The protocol's effect, this store as both: arch removal without first avalanches (<s> 40, 1
-# clog) over all of it (80/3, 3 clogs): ratio 1.5, z = ln 1.5 / sqrt(1 + 1/3); the first
-# avalanches (20, 2 clogs) over it: 0.75, z = ln 0.75 / sqrt(1/2 + 1/3). No clog: no ratio.
+# clog) over all of it (80/3, 3 clogs): ratio 1.5, z = ln 1.5 / sqrt(1 + 1/3); the same seeds'
+# first avalanches are equal (2 of 2 at D/d 3). No clog: no ratio.
 eff = silo_validation.protocol_effect(
     silo_validation.summarize_store(store, "synthetic", True), res)
 e3 = [e for e in eff if abs(e["D_over_d"] - 3) < 1e-9][0]
 check(abs(e3["steady_over_refill"]["ratio"] - 1.5) < 1e-12 and
       abs(e3["steady_over_refill"]["z"] - math.log(1.5) / math.sqrt(4 / 3)) < 1e-12,
       "steady over refill: %s" % e3["steady_over_refill"])
-check(abs(e3["first_over_refill"]["ratio"] - 0.75) < 1e-12 and
-      abs(e3["first_over_refill"]["z"] - math.log(0.75) / math.sqrt(5 / 6)) < 1e-12,
-      "first over refill: %s" % e3["first_over_refill"])
+check(e3["same_seed"] == {"pairs": 2, "equal": 2, "differ": []}, "same seeds: %s" % e3["same_seed"])
+# A refill store whose seed s2 flowed otherwise (its first avalanche 31 grains, not 30): named.
+other = survival.copy()
+other.loc[(other["point"] == 0) & (other["realization"] == 1) & (other["interval"] == 0),
+          "avalanche_size"] = 31.0
+store2 = Store.from_frames("other", {"points": pts, "survival": other,
+                                     "realizations": realizations, "arches": arches})
+eff2 = silo_validation.protocol_effect(
+    silo_validation.summarize_store(store, "synthetic", True),
+    silo_validation.summarize_store(store2, "other"))
+check(eff2[1]["same_seed"] == {"pairs": 2, "equal": 1, "differ": ["s2"]},
+      "a differing first avalanche: %s" % eff2[1]["same_seed"])
 e5 = [e for e in eff if abs(e["D_over_d"] - 5) < 1e-9][0]
 check(e5["steady_over_refill"] is None, "no ratio without a clog")
 check(len(eff) == 5, "one row per outlet in both")
