@@ -311,7 +311,8 @@ def main():
                     xytext=(r["D_over_d"] ** 2, math.log(r["lo"] + 1)),
                     arrowprops={"arrowstyle": "->"})
     if bounds:
-        ax.plot([], [], "^", color="k", label="lower bound (no clog)")
+        ax.plot([r["D_over_d"] ** 2 for r in bounds], [math.log(r["lo"] + 1) for r in bounds],
+                "^", color="k", label="95 % lower bound (no clog)")
     if f:
         xx = np.linspace(min(f["outlets"]) ** 2 * 0.95, max(f["outlets"]) ** 2 * 1.05, 50)
         ax.plot(xx, f["a"] + f["b"] * xx, "-", color="grey",
