@@ -174,7 +174,9 @@ def critical_fit(R, y, w, chi2_exp):
             best = (c2, float(rc), float(g), float(c0))
     c2, rc, g, c0 = best
     d_aic = (c2 + 6) - (chi2_exp + 4)
-    return {"R_c": rc, "gamma": g, "ln_A": c0, "chi2": c2, "chi2_exponential": chi2_exp,
+    # At the scan's far end the law has no finite R_c to offer: it only mimics a smooth growth.
+    return {"R_c": rc, "R_c_at_scan_edge": bool(rc >= R.max() + 49.9),
+            "gamma": g, "ln_A": c0, "chi2": c2, "chi2_exponential": chi2_exp,
             "aic_critical_minus_exponential": d_aic,
             "verdict": "exponential" if d_aic > 2 else "critical" if d_aic < -2 else "undecided"}
 
@@ -284,9 +286,11 @@ def main():
                    else float("nan")))
         c = f["critical"]
         if c:
-            md += ("Critical alternative ln(<s>+1) = ln A - gamma ln(R_c - D/d): R_c = %.3g, "
+            md += ("Critical alternative ln(<s>+1) = ln A - gamma ln(R_c - D/d): R_c = %.3g%s, "
                    "gamma = %.3g, chi-square %.2f against %.2f; AIC(critical) - AIC(exponential) "
-                   "= %+.2f: %s\n" % (c["R_c"], c["gamma"], c["chi2"], c["chi2_exponential"],
+                   "= %+.2f: %s\n" % (c["R_c"], " (the scan's far end, 50 beyond the largest "
+                                       "outlet: no finite R_c)" if c["R_c_at_scan_edge"] else "",
+                                       c["gamma"], c["chi2"], c["chi2_exponential"],
                                        c["aic_critical_minus_exponential"], c["verdict"]))
     if args.refill:
         md += "\n" + table("Refill after each clog", result["refill"])

@@ -160,8 +160,13 @@ Rs = [3.0, 3.5, 4.0, 4.5, 5.0]
 import numpy as np  # noqa: E402
 c = silo_validation.critical_fit(np.array(Rs), np.array([2 - 3 * math.log(6 - r) for r in Rs]),
                                  np.full(5, 100.0), 50.0)
-check(abs(c["R_c"] - 6) < 0.01 and abs(c["gamma"] - 3) < 0.01 and c["verdict"] == "critical",
-      "critical data: %s" % c)
+check(abs(c["R_c"] - 6) < 0.01 and abs(c["gamma"] - 3) < 0.01 and c["verdict"] == "critical"
+      and not c["R_c_at_scan_edge"], "critical data: %s" % c)
+# Points that curve upward less than any finite R_c allows (ln(<s>+1) linear in D/d) drive R_c
+# to the scan's far end, which is flagged.
+c = silo_validation.critical_fit(np.array(Rs), np.array([2.0 * r for r in Rs]), np.full(5, 1.0),
+                                 0.0)
+check(c["R_c_at_scan_edge"], "linear data: R_c at the scan's edge: %s" % c)
 c = silo_validation.critical_fit(np.array(Rs), np.array([A + B * r * r for r in Rs]),
                                  np.full(5, 100.0), 0.0)
 check(c["verdict"] == "exponential" and c["aic_critical_minus_exponential"] > 2,
