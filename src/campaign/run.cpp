@@ -174,27 +174,8 @@ MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
             << "): " << todo.size() << " realization(s) to run\n"
             << describe_rounds(rs, quantity) << std::flush;
         const MasterReport r = master.run(todo, totals);
-        all.stored += r.stored;
-        all.failed += r.failed;
-        all.errors += r.errors;
-        all.gave_up += r.gave_up;
-        all.interrupted += r.interrupted;
-        all.not_started += r.not_started;
-        all.reassigned += r.reassigned;
-        all.late_identical += r.late_identical;
-        all.late_different += r.late_different;
-        all.silent_at_end = r.silent_at_end;
-        all.wall_seconds += r.wall_seconds;
-        all.cpu_seconds += r.cpu_seconds;
-        if (r.stopped) {
-            all.stopped = true;
-            all.stop_reason = r.stop_reason;
-            break;
-        }
-        if (!r.fail_fast.empty()) {
-            all.fail_fast = r.fail_fast;
-            break;
-        }
+        add_round(all, r);
+        if (r.stopped || !r.fail_fast.empty()) break;
         if (r.gave_up > 0 || r.stored == 0) {
             err << "campaign: round " << rs.round + 1 << " is incomplete (realizations left in "
                 << "error); run the same command again to retry them and go on" << std::endl;

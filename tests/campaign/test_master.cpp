@@ -184,6 +184,51 @@ TEST(Channel, MessagesRoundTripAndAreChecked) {
     EXPECT_THROW(decode_message(bad), core::DecodeError);
 }
 
+// A target campaign adds its rounds' reports (run.cpp): every field must come through. The
+// rounds' checkpoint seconds once did not (a stopped target campaign said "0s kept in
+// checkpoints ... 0 realization(s) continued from a checkpoint" after saving two).
+TEST(Master, AddRoundKeepsEveryField) {
+    campaign::MasterReport one, two, all;
+    int k = 1;
+    for (auto* r : {&one, &two}) {
+        for (int* f :
+             {&r->stored, &r->failed, &r->errors, &r->gave_up, &r->interrupted, &r->not_started,
+              &r->reassigned, &r->late_identical, &r->late_different, &r->silent_at_end,
+              &r->checkpoints_written, &r->resumed, &r->deadline_skipped})
+            *f = k++;
+        for (double* f :
+             {&r->wall_seconds, &r->cpu_seconds, &r->lost_worker_seconds, &r->saved_worker_seconds})
+            *f = 0.5 * k++;
+    }
+    one.stopped_running = true;
+    two.stopped = true;
+    two.stop_reason = "SIGTERM";
+    one.fail_fast = "3 failed alike";
+    campaign::add_round(all, one);
+    campaign::add_round(all, two);
+    EXPECT_EQ(all.stored, one.stored + two.stored);
+    EXPECT_EQ(all.failed, one.failed + two.failed);
+    EXPECT_EQ(all.errors, one.errors + two.errors);
+    EXPECT_EQ(all.gave_up, one.gave_up + two.gave_up);
+    EXPECT_EQ(all.interrupted, one.interrupted + two.interrupted);
+    EXPECT_EQ(all.not_started, one.not_started + two.not_started);
+    EXPECT_EQ(all.reassigned, one.reassigned + two.reassigned);
+    EXPECT_EQ(all.late_identical, one.late_identical + two.late_identical);
+    EXPECT_EQ(all.late_different, one.late_different + two.late_different);
+    EXPECT_EQ(all.silent_at_end, two.silent_at_end);  // the last round's
+    EXPECT_EQ(all.checkpoints_written, one.checkpoints_written + two.checkpoints_written);
+    EXPECT_EQ(all.resumed, one.resumed + two.resumed);
+    EXPECT_EQ(all.deadline_skipped, one.deadline_skipped + two.deadline_skipped);
+    EXPECT_DOUBLE_EQ(all.wall_seconds, one.wall_seconds + two.wall_seconds);
+    EXPECT_DOUBLE_EQ(all.cpu_seconds, one.cpu_seconds + two.cpu_seconds);
+    EXPECT_DOUBLE_EQ(all.lost_worker_seconds, one.lost_worker_seconds + two.lost_worker_seconds);
+    EXPECT_DOUBLE_EQ(all.saved_worker_seconds, one.saved_worker_seconds + two.saved_worker_seconds);
+    EXPECT_TRUE(all.stopped_running);
+    EXPECT_TRUE(all.stopped);
+    EXPECT_EQ(all.stop_reason, "SIGTERM");
+    EXPECT_EQ(all.fail_fast, "3 failed alike");
+}
+
 TEST(Master, EveryTaskIsStoredExactlyOnce) {
     Harness h(24, 3, [](const TaskRef& t, int, const engine::RunHooks& hooks) {
         cooperative_sleep(std::chrono::milliseconds(1 + t.task_id % 5), hooks);

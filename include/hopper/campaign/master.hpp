@@ -102,6 +102,11 @@ struct MasterReport {
     int deadline_skipped = 0;  // tasks not started because they would end after the deadline
 };
 
+// Adds one round's report to a run's (a target campaign runs Master::run once per round): the
+// counts and seconds add up; the stop, its reason, the early failure and the workers silent at
+// the end are the last round's, where it has them. Every field of MasterReport is handled here.
+void add_round(MasterReport& run, const MasterReport& round);
+
 // Counts of the sweep's tasks before this run, for the progress line.
 struct Totals {
     int total = 0;     // tasks of the sweep
