@@ -291,8 +291,8 @@ def fill_levels(s, bins):
         for end, dur in zip(ends, sv["duration"].to_numpy(float)):
             a, b = end - dur, end
             overlap = np.clip(np.minimum(b, t[1:]) - np.maximum(a, t[:-1]), 0, None)
-            for i in range(nb):
-                time[i] += overlap[level == i].sum()
+            inside = (level >= 0) & (level < nb)
+            time += np.bincount(level[inside], overlap[inside], nb)
         for o in onsets:
             k = max(int(np.searchsorted(t, o, side="right")) - 1, 0)
             i = int(np.digitize([n[k]], bins)[0]) - 1

@@ -41,6 +41,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from clogging import censored_mean  # noqa: E402
 from hopper_store import open_store  # noqa: E402
 
 plt.rcParams.update({"pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hopper"})
@@ -55,17 +56,9 @@ def interval_stats(sv):
     """<s> of survival intervals `sv`: grains / clogs (censored intervals add grains, no clog),
     its standard error and 95 % chi-square interval; with no clog the one-sided 95 % lower bound
     grains / (-ln 0.05)."""
-    k = int(sv["event"].sum())
-    grains = float(sv["avalanche_size"].sum())
-    row = {"clogs": k, "grains": grains}
-    if k > 0:
-        m = grains / k
-        row.update({"mean_s": m, "se": m / math.sqrt(k),
-                    "lo": 2 * grains / stats.chi2.ppf(0.975, 2 * k),
-                    "hi": 2 * grains / stats.chi2.ppf(0.025, 2 * k)})
-    else:
-        row.update({"mean_s": None, "se": None,
-                    "lo": grains / (stats.chi2.ppf(0.95, 2) / 2), "hi": None})
+    e = censored_mean(sv["avalanche_size"], sv["event"])
+    row = {"clogs": e["jams"], "grains": e["total"], "mean_s": e["mean"], "se": e["se"],
+           "lo": e["lo"], "hi": e["hi"]}
     # The shape: the literature finds exponential avalanche sizes at every outlet. Of the
     # completed avalanches (censored ones left out), with 10 or more: the coefficient of
     # variation (1 for an exponential) and the Kolmogorov-Smirnov p-value against the
