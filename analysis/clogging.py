@@ -9,6 +9,12 @@ usage:
       the published protocol's tau by fill level: per bin of particles in the hopper, the
       flowing time spent there (discharge curve) and the jams whose onset fell there; what a
       steady state of that many particles is to be compared with
+  clogging.py question STORE.h5 [--json OUT] [--md OUT]
+      the open question's table (campaigns/open-question/survival.toml): per outlet D, the
+      realizations, flowing time, jams, tau [95 % CI] (a 95 % lower bound where no jam),
+      <s> +- se, tau's relative 95 % half-width against the campaign's +-10 %, and the worker
+      core-hours (per point and per jam); then the store's own fits of the jam rate and of <s>
+      versus D (`campaign analyze`: exponential against power law, the AIC verdict)
   clogging.py heads PUBLISHED.h5 STEADY.h5 [--ns-per-particle-step LABEL=NS ...] [--json OUT]
       per point of both stores: jams, tau [95 % CI], <s> +- se, particle-steps per jam (the
       work, independent of the machine's load) and, where a point's CPU cost per particle-step
@@ -322,6 +328,89 @@ def levels(path, bins, out):
             json.dump(result, fh, indent=1)
 
 
+def question_summary(s, path):
+    """The open question's table of an open store (hopper_store.Store): per point in order of D,
+    flowing time (the survival intervals' durations), jams, tau and <s> (censored_mean; a bound
+    without a jam), tau's relative 95 % half-width, worker core-hours (task_seconds) per point and
+    per jam; and the fits `campaign analyze` stored (jam rate and <s> versus D), not refitted."""
+    r, surv, pts = s.realizations, s.survival, s.points
+    rows = []
+    for i, pt in pts.sort_values("D_cm").iterrows():
+        sv = surv[surv["point"] == i]
+        rr = r[r["point"] == i]
+        tau = censored_mean(sv["duration"], sv["event"])
+        mean_s = censored_mean(sv["avalanche_size"], sv["event"]) if "avalanche_size" in sv \
+            else None
+        core_h = float(rr["task_seconds"].sum()) / 3600 if len(rr) else 0.0
+        half = (tau["hi"] - tau["lo"]) / 2 / tau["mean"] if tau["mean"] else None
+        rows.append({"label": pt["label"], "D_cm": float(pt["D_cm"]),
+                     "realizations": int(len(rr)),
+                     "statuses": {str(k): int(v) for k, v in rr["status"].value_counts().items()},
+                     "flow_time": tau["total"], "tau": tau, "mean_s": mean_s,
+                     "tau_rel_half_width": half, "core_hours": core_h,
+                     "core_hours_per_jam": core_h / tau["jams"] if tau["jams"] else None})
+    fits = {}
+    if s.has_analysis:
+        for name, table in (("jam_rate", s.jam_rate), ("mean_s", s.avalanche)):
+            fits[name] = [{k: (None if isinstance(v, float) and math.isnan(v) else
+                               v.item() if hasattr(v, "item") else v)
+                           for k, v in row.items() if not str(k).startswith("has_")}
+                          for _, row in table.iterrows()]
+    return {"store": path, "points": rows, "fits": fits,
+            "core_hours": sum(row["core_hours"] for row in rows)}
+
+
+def question_markdown(result, target=0.1):
+    """The table and the fits' verdicts as Markdown (docs/clogging.md, section 3)."""
+    out = ["| D (cm) | realizations | flowing time (s) | jams | tau (s) +- se [95 % CI] | "
+           "tau +-95 % | <s> +- se | core-hours | core-hours per jam |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for row in result["points"]:
+        half = row["tau_rel_half_width"]
+        ms = row["mean_s"]
+        out.append("| %.3g | %d | %.0f | %d | %s | %s | %s | %.2f | %s |" % (
+            row["D_cm"], row["realizations"], row["flow_time"], row["tau"]["jams"],
+            fmt(row["tau"]),
+            "%.0f %%%s" % (100 * half, " (met)" if half <= target else "") if half else "-",
+            ("%.3g +- %.2g" % (ms["mean"], ms["se"]) if ms and ms["mean"] is not None else
+             "> %.3g" % ms["lo"] if ms else "-"),
+            row["core_hours"],
+            "%.3g" % row["core_hours_per_jam"] if row["core_hours_per_jam"] else "-"))
+    out.append("")
+    out.append("Core-hours in all (worker time): %.2f." % result["core_hours"])
+    for name, what in (("jam_rate", "jam rate 1/tau"), ("mean_s", "<s>")):
+        for f in result["fits"].get(name, []):
+            out.append("")
+            parts = []
+            if f.get("exp_B") is not None:
+                sign = -1 if name == "jam_rate" else 1  # the rate falls as exp(-B D), <s> grows
+                parts.append("exponential %s exp(%sB D), B = %.3g +- %.2g per cm" % (
+                    "1/tau ~" if name == "jam_rate" else "<s> ~", "-" if sign < 0 else "",
+                    f["exp_B"] / 100, (f.get("exp_B_err") or 0) / 100))
+            if f.get("pow_Dc") is not None and f.get("pow_gamma") is not None:
+                parts.append("power law with D_c = %.3g cm, gamma = %.3g" % (
+                    f["pow_Dc"] * 100, f["pow_gamma"]))
+            if f.get("exp_aic") is not None and f.get("pow_aic") is not None:
+                parts.append("AIC power law - exponential = %+.2f" % (f["pow_aic"] - f["exp_aic"]))
+            out.append("Fit of the %s versus D (%s, %d outlets): %spreferred: %s; %s." % (
+                what, f.get("group") or "all points", f.get("n_points", 0),
+                "; ".join(parts) + "; " if parts else "", f.get("preferred"), f.get("decision")))
+    return "\n".join(out) + "\n"
+
+
+def question(path, out, md):
+    with open_store(path) as s:
+        result = question_summary(s, path)
+    text = question_markdown(result)
+    print(text, end="")
+    if out:
+        with open(out, "w") as fh:
+            json.dump(result, fh, indent=1)
+    if md:
+        with open(md, "w") as fh:
+            fh.write(text)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -338,12 +427,18 @@ def main():
     lv.add_argument("--bins", default="0,300,700,1500,3000,5000,9000",
                     help="fill-level bin edges, particles in the hopper (default %(default)s)")
     lv.add_argument("--json")
+    q = sub.add_parser("question")
+    q.add_argument("store")
+    q.add_argument("--json")
+    q.add_argument("--md", help="write the table as Markdown too")
     args = ap.parse_args()
     for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)]:
         if not os.path.exists(p):
             sys.exit("clogging.py: no such store: %s" % p)
     if args.cmd == "arrests":
         arrests(args.store, args.json)
+    elif args.cmd == "question":
+        question(args.store, args.json, args.md)
     elif args.cmd == "levels":
         try:
             bins = [float(v) for v in args.bins.split(",")]

@@ -1,8 +1,10 @@
 #!/usr/bin/python3
-"""analysis/clogging.py arrests and levels on synthetic stores (hopper_store.Store.from_frames) whose
-answers are known by hand (issue 23): arrests counted by status, tau (censored mean: flow time /
-jams) and jams per realization by group, and tau per interval after an ordinary shake and after
-a grown one, the comparison that does not select realizations by their number of jams.
+"""analysis/clogging.py arrests, levels and question on synthetic stores
+(hopper_store.Store.from_frames) whose answers are known by hand (issue 23): arrests counted by
+status, tau (censored mean: flow time / jams) and jams per realization by group, and tau per
+interval after an ordinary shake and after a grown one, the comparison that does not select
+realizations by their number of jams; the published protocol's jams by fill level; the open
+question's table (bounds, core-hours, the store's fits in cm).
 
 usage: test_clogging.py SOURCE_DIR     (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
 """
@@ -87,5 +89,53 @@ for row, (t, k) in zip(lv, want):
                                                          row["jams"], t, k))
 check(abs(lv[2]["tau"]["mean"] - 1.9) < 1e-12 and lv[1]["tau"]["mean"] is None,
       "tau by level: %s" % [row["tau"]["mean"] for row in lv])
+
+# question: the open question's table. Point 0 (D = 3.1 cm, listed first) has no jam: 80 s of
+# flow in 2 realizations of 1800 s worker time each, so tau > 80 / (chi2_0.95(2) / 2) = 26.70 s
+# and 1 core-hour; point 1 (D = 2.7 cm): intervals 2 and 4 s ended by jams and 6 s censored,
+# tau = 12 / 2 = 6 s, its 95 % interval 24 / chi2_{0.975,0.025}(4) = [2.1538, 49.544] s, a
+# relative half-width of 3.9492; <s> = (100 + 300 + 200) / 2 = 300; 720 s = 0.2 core-hours,
+# 0.1 per jam. The fits are the store's, reported in cm, not refitted.
+q_store = Store.from_frames("question", {
+    "points": pd.DataFrame({"label": ["D_cm=3.1", "D_cm=2.7"], "D_cm": [3.1, 2.7]}),
+    "realizations": pd.DataFrame({"point": [0, 0, 1], "realization": [0, 1, 0],
+                                  "status": ["complete"] * 3,
+                                  "task_seconds": [1800.0, 1800.0, 720.0]}),
+    "survival": pd.DataFrame({"point": [0, 0, 1, 1, 1], "realization": [0, 1, 0, 0, 0],
+                              "interval": [0, 0, 0, 1, 2], "duration": [30.0, 50.0, 2.0, 4.0, 6.0],
+                              "event": [0, 0, 1, 1, 0],
+                              "avalanche_size": [900.0, 1100.0, 100.0, 300.0, 200.0]}),
+    "analysis": pd.DataFrame(),
+    "jam_rate": pd.DataFrame({"group": ["theta_deg=45"], "n_points": [5], "exp_B": [200.0],
+                              "exp_B_err": [10.0], "exp_ln_A": [1.0], "exp_aic": [5.0],
+                              "pow_Dc": [0.04], "pow_gamma": [3.0], "pow_ln_A": [float("nan")],
+                              "pow_aic": [8.0], "preferred": ["exponential"],
+                              "decision": ["exponential preferred"]}),
+    "avalanche": pd.DataFrame({"group": ["theta_deg=45"], "n_points": [1], "exp_B": [float("nan")],
+                               "preferred": ["undecided"],
+                               "decision": ["too few points to decide (1 < 5)"]})})
+q = clogging.question_summary(q_store, "synthetic")
+p27, p31 = q["points"]
+check(p27["D_cm"] == 2.7 and p31["D_cm"] == 3.1, "points in order of D: %s, %s"
+      % (p27["D_cm"], p31["D_cm"]))
+check(p27["tau"]["jams"] == 2 and abs(p27["tau"]["mean"] - 6.0) < 1e-12
+      and abs(p27["tau"]["lo"] - 2.15376) < 1e-4 and abs(p27["tau"]["hi"] - 49.544) < 1e-2,
+      "tau at 2.7 cm: %s" % p27["tau"])
+check(abs(p27["tau_rel_half_width"] - 3.9492) < 1e-3, "half-width %s" % p27["tau_rel_half_width"])
+check(abs(p27["mean_s"]["mean"] - 300.0) < 1e-12, "<s> at 2.7 cm: %s" % p27["mean_s"])
+check(abs(p27["core_hours"] - 0.2) < 1e-12 and abs(p27["core_hours_per_jam"] - 0.1) < 1e-12,
+      "core-hours at 2.7 cm: %s, per jam %s" % (p27["core_hours"], p27["core_hours_per_jam"]))
+check(p31["tau"]["mean"] is None and abs(p31["tau"]["lo"] - 26.704) < 1e-3
+      and p31["flow_time"] == 80.0 and p31["core_hours_per_jam"] is None
+      and p31["tau_rel_half_width"] is None, "bound at 3.1 cm: %s" % p31)
+check(abs(q["core_hours"] - 1.2) < 1e-12, "core-hours in all: %s" % q["core_hours"])
+fit = q["fits"]["jam_rate"][0]
+check(fit["pow_ln_A"] is None and fit["exp_B"] == 200.0, "NaN fit values become None: %s" % fit)
+md = clogging.question_markdown(q)
+for want in ("> 26.7 (no jam)", "| 2.7 | 1 | 12 | 2 | 6 +- 4.2 [2.15, 49.5] | 395 % |",
+             "B = 2 +- 0.1 per cm", "D_c = 4 cm, gamma = 3",
+             "AIC power law - exponential = +3.00", "preferred: exponential",
+             "too few points to decide", "Core-hours in all (worker time): 1.20."):
+    check(want in md, "markdown has %r:\n%s" % (want, md))
 
 check.finish()
