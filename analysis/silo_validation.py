@@ -11,7 +11,9 @@ found, the mean aspect ratio span / height), for both protocols. The fit
 ln(<s> + 1) = a + b (D/d)^2 is weighted least squares with sigma_i = se_i / (<s>_i + 1), over the
 outlets with at least 5 clogs; a and b with their standard errors and the reduced chi-square;
 with 4 or more such outlets also the critical alternative ln(<s>+1) = ln A - gamma ln(R_c - D/d)
-(a finite outlet R_c beyond which nothing clogs) and the AIC verdict between the two.
+(a finite outlet R_c beyond which nothing clogs) and the AIC verdict between the two; a best
+R_c at the far end of its scan (50 beyond the largest outlet) is no finite R_c, and when that
+limit wins the verdict says "exponential in D/d (no finite R_c)".
 The arch-removal store's <s> leaves out each realization's first avalanche, the one from the
 settled fill to the first clog (a settled packing is not the steady flow the protocol is
 about), and reports it apart; --keep-first counts it. Every clog's arch counts, the first
@@ -167,11 +169,14 @@ def critical_fit(R, y, w, chi2_exp):
             best = (c2, float(rc), float(g), float(c0))
     c2, rc, g, c0 = best
     d_aic = (c2 + 6) - (chi2_exp + 4)
-    # At the scan's far end the law has no finite R_c to offer: it only mimics a smooth growth.
-    return {"R_c": rc, "R_c_at_scan_edge": bool(rc >= R.max() + 49.9),
+    # At the scan's far end the law has no finite R_c to offer: it only mimics a smooth growth,
+    # ln(<s>+1) close to linear in D/d, and a verdict for it is not one for a critical outlet.
+    edge = bool(rc >= R.max() + 49.9)
+    verdict = ("exponential" if d_aic > 2 else "undecided" if d_aic >= -2 else
+               "exponential in D/d (no finite R_c)" if edge else "critical")
+    return {"R_c": rc, "R_c_at_scan_edge": edge,
             "gamma": g, "ln_A": c0, "chi2": c2, "chi2_exponential": chi2_exp,
-            "aic_critical_minus_exponential": d_aic,
-            "verdict": "exponential" if d_aic > 2 else "critical" if d_aic < -2 else "undecided"}
+            "aic_critical_minus_exponential": d_aic, "verdict": verdict}
 
 
 def mean_s_text(r):
@@ -294,7 +299,8 @@ def main():
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 3.6))
     for key, marker, name in (("remove_arch", "o", "arch removal"), ("refill", "s", "refill")):
-        rows = [r for r in result.get(key, []) if r["mean_s"] is not None]
+        rows = [r for r in result.get(key, []) if r["mean_s"] is not None
+                and (key != "remove_arch" or r["clogs"] >= 5)]
         if not rows:
             continue
         x = [r["D_over_d"] ** 2 for r in rows]
@@ -302,6 +308,12 @@ def main():
         e = [r["se"] / (r["mean_s"] + 1) for r in rows]
         ax.errorbar(x, y, yerr=e, fmt=marker, mfc="none" if key == "refill" else None,
                     label="%s (%s clogs)" % (name, "/".join(str(r["clogs"]) for r in rows)))
+    few = [r for r in result["remove_arch"] if r["mean_s"] is not None and r["clogs"] < 5]
+    if few:  # drawn, but too few clogs to enter the fits: open
+        ax.errorbar([r["D_over_d"] ** 2 for r in few], [math.log(r["mean_s"] + 1) for r in few],
+                    yerr=[r["se"] / (r["mean_s"] + 1) for r in few], fmt="o", mfc="white",
+                    color="C0", label="arch removal, fewer than 5 clogs (%s): "
+                    "not fitted" % "/".join(str(r["clogs"]) for r in few))
     bounds = [r for r in result["remove_arch"] if r["mean_s"] is None and r["grains"] > 0]
     for r in bounds:
         ax.annotate("", xy=(r["D_over_d"] ** 2, math.log(r["lo"] + 1) + 0.6),
@@ -314,6 +326,12 @@ def main():
         xx = np.linspace(min(f["outlets"]) ** 2 * 0.95, max(f["outlets"]) ** 2 * 1.05, 50)
         ax.plot(xx, f["a"] + f["b"] * xx, "-", color="grey",
                 label="a + b (D/d)$^2$: b = %.3f $\\pm$ %.3f" % (f["b"], f["b_err"]))
+        c = f["critical"]
+        if c:
+            R = np.sqrt(xx)
+            ax.plot(xx, c["ln_A"] - c["gamma"] * np.log(c["R_c"] - R), "--", color="grey",
+                    label="ln A - $\\gamma$ ln(R$_c$ - D/d): %s" % (
+                        "no finite R$_c$" if c["R_c_at_scan_edge"] else "R$_c$ = %.3g" % c["R_c"]))
     ax.set_xlabel("(D/d)$^2$")
     ax.set_ylabel("ln(<s> + 1)")
     ax.legend(fontsize=7)

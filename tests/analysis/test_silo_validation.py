@@ -167,6 +167,12 @@ check(abs(c["R_c"] - 6) < 0.01 and abs(c["gamma"] - 3) < 0.01 and c["verdict"] =
 c = silo_validation.critical_fit(np.array(Rs), np.array([2.0 * r for r in Rs]), np.full(5, 1.0),
                                  0.0)
 check(c["R_c_at_scan_edge"], "linear data: R_c at the scan's edge: %s" % c)
+# ... and when it beats the exponential in (D/d)^2 by the AIC, the verdict says what won (a
+# growth exponential in D/d), not "critical".
+c = silo_validation.critical_fit(np.array(Rs), np.array([2.0 * r for r in Rs]), np.full(5, 1.0),
+                                 50.0)
+check(c["verdict"] == "exponential in D/d (no finite R_c)"
+      and c["aic_critical_minus_exponential"] < -2, "linear data preferred: %s" % c)
 c = silo_validation.critical_fit(np.array(Rs), np.array([A + B * r * r for r in Rs]),
                                  np.full(5, 100.0), 0.0)
 check(c["verdict"] == "exponential" and c["aic_critical_minus_exponential"] > 2,
