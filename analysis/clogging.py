@@ -382,11 +382,10 @@ def question_markdown(result, target=0.1):
         for f in result["fits"].get(name, []):
             out.append("")
             parts = []
-            if f.get("exp_B") is not None:
-                sign = -1 if name == "jam_rate" else 1  # the rate falls as exp(-B D), <s> grows
-                parts.append("exponential %s exp(%sB D), B = %.3g +- %.2g per cm" % (
-                    "1/tau ~" if name == "jam_rate" else "<s> ~", "-" if sign < 0 else "",
-                    f["exp_B"] / 100, (f.get("exp_B_err") or 0) / 100))
+            if f.get("exp_B") is not None:  # the rate falls as exp(-B D), <s> grows as exp(B D)
+                law = "1/tau ~ exp(-B D)" if name == "jam_rate" else "<s> ~ exp(B D)"
+                parts.append("exponential %s, B = %.3g +- %.2g per cm" % (
+                    law, f["exp_B"] / 100, (f.get("exp_B_err") or 0) / 100))
             if f.get("pow_Dc") is not None and f.get("pow_gamma") is not None:
                 parts.append("power law with D_c = %.3g cm, gamma = %.3g" % (
                     f["pow_Dc"] * 100, f["pow_gamma"]))

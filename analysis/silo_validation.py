@@ -46,6 +46,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from clogging import censored_mean  # noqa: E402
 from hopper_store import open_store  # noqa: E402
 
+MIN_CLOGS_FIT = 5      # an outlet enters the fits with this many clogs or more
+R_C_SCAN_SPAN = 50.0   # the critical fit scans R_c up to this far (D/d) beyond the largest outlet
+
 plt.rcParams.update({"pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hopper"})
 
 
@@ -133,7 +136,7 @@ def summarize_store(s, path, skip_first=False):
 
 
 def fit(rows):
-    use = [r for r in rows if r["clogs"] >= 5]
+    use = [r for r in rows if r["clogs"] >= MIN_CLOGS_FIT]
     if len(use) < 3:
         return None
     x = np.array([r["D_over_d"] ** 2 for r in use])
@@ -160,7 +163,7 @@ def critical_fit(R, y, w, chi2_exp):
     if len(R) < 4:
         return None
     best = None
-    for rc in R.max() + np.geomspace(1e-3, 50.0, 4000):
+    for rc in R.max() + np.geomspace(1e-3, R_C_SCAN_SPAN, 4000):
         X = np.vstack([np.ones_like(R), -np.log(rc - R)]).T
         cov = np.linalg.inv(X.T @ (w[:, None] * X))
         c0, g = cov @ (X.T @ (w * y))
@@ -171,7 +174,7 @@ def critical_fit(R, y, w, chi2_exp):
     d_aic = (c2 + 6) - (chi2_exp + 4)
     # At the scan's far end the law has no finite R_c to offer: it only mimics a smooth growth,
     # ln(<s>+1) close to linear in D/d, and a verdict for it is not one for a critical outlet.
-    edge = bool(rc >= R.max() + 49.9)
+    edge = bool(rc >= R.max() + R_C_SCAN_SPAN - 0.1)
     verdict = ("exponential" if d_aic > 2 else "undecided" if d_aic >= -2 else
                "exponential in D/d (no finite R_c)" if edge else "critical")
     return {"R_c": rc, "R_c_at_scan_edge": edge,
@@ -286,8 +289,9 @@ def main():
         if c:
             md += ("Critical alternative ln(<s>+1) = ln A - gamma ln(R_c - D/d): R_c = %.3g%s, "
                    "gamma = %.3g, chi-square %.2f against %.2f; AIC(critical) - AIC(exponential) "
-                   "= %+.2f: %s\n" % (c["R_c"], " (the scan's far end, 50 beyond the largest "
-                                       "outlet: no finite R_c)" if c["R_c_at_scan_edge"] else "",
+                   "= %+.2f: %s\n" % (c["R_c"], " (the scan's far end, %g beyond the largest "
+                                       "outlet: no finite R_c)" % R_C_SCAN_SPAN
+                                       if c["R_c_at_scan_edge"] else "",
                                        c["gamma"], c["chi2"], c["chi2_exponential"],
                                        c["aic_critical_minus_exponential"], c["verdict"]))
     if args.refill:
@@ -300,7 +304,7 @@ def main():
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 3.6))
     for key, marker, name in (("remove_arch", "o", "arch removal"), ("refill", "s", "refill")):
         rows = [r for r in result.get(key, []) if r["mean_s"] is not None
-                and (key != "remove_arch" or r["clogs"] >= 5)]
+                and (key != "remove_arch" or r["clogs"] >= MIN_CLOGS_FIT)]
         if not rows:
             continue
         x = [r["D_over_d"] ** 2 for r in rows]
@@ -308,12 +312,13 @@ def main():
         e = [r["se"] / (r["mean_s"] + 1) for r in rows]
         ax.errorbar(x, y, yerr=e, fmt=marker, mfc="none" if key == "refill" else None,
                     label="%s (%s clogs)" % (name, "/".join(str(r["clogs"]) for r in rows)))
-    few = [r for r in result["remove_arch"] if r["mean_s"] is not None and r["clogs"] < 5]
+    few = [r for r in result["remove_arch"] if r["mean_s"] is not None
+           and r["clogs"] < MIN_CLOGS_FIT]
     if few:  # drawn, but too few clogs to enter the fits: open
         ax.errorbar([r["D_over_d"] ** 2 for r in few], [math.log(r["mean_s"] + 1) for r in few],
                     yerr=[r["se"] / (r["mean_s"] + 1) for r in few], fmt="o", mfc="white",
-                    color="C0", label="arch removal, fewer than 5 clogs (%s): "
-                    "not fitted" % "/".join(str(r["clogs"]) for r in few))
+                    color="C0", label="arch removal, fewer than %d clogs (%s): "
+                    "not fitted" % (MIN_CLOGS_FIT, "/".join(str(r["clogs"]) for r in few)))
     bounds = [r for r in result["remove_arch"] if r["mean_s"] is None and r["grains"] > 0]
     for r in bounds:
         ax.annotate("", xy=(r["D_over_d"] ** 2, math.log(r["lo"] + 1) + 0.6),
