@@ -15,6 +15,13 @@ usage:
       <s> +- se, tau's relative 95 % half-width against the campaign's +-10 %, and the worker
       core-hours (per point and per jam); then the store's own fits of the jam rate and of <s>
       versus D (`campaign analyze`: exponential against power law, the AIC verdict)
+  clogging.py plan STORE.h5 [--outlets 3.6,3.7,...] [--core-s-per-flow-s X] [--power 0.95]
+                  [--json OUT] [--md OUT]
+      what would decide the open question: with the store's two fitted laws of the jam rate
+      (exponential and power law, `campaign analyze`) taken as they are, for each outlet D the
+      flowing time after which one outlet's jam count favours the true law by an AIC margin of
+      2 with the given probability under either law, the jams each law expects there and the
+      core-hours at the store's measured cost per flowing second
   clogging.py heads PUBLISHED.h5 STEADY.h5 [--ns-per-particle-step LABEL=NS ...] [--json OUT]
       per point of both stores: jams, tau [95 % CI], <s> +- se, particle-steps per jam (the
       work, independent of the machine's load) and, where a point's CPU cost per particle-step
@@ -410,6 +417,136 @@ def question(path, out, md):
             fh.write(text)
 
 
+def law_rates(fit, D_m):
+    """The jam rates (1/s) the two fitted laws give at outlet D (m): exponential
+    ln lambda = ln A - B D, power law ln lambda = ln A + gamma ln(D_c - D), zero at and beyond
+    D_c (docs/statistics.md, "Jam rate versus D")."""
+    exp_rate = math.exp(fit["exp_ln_A"] - fit["exp_B"] * D_m)
+    if D_m >= fit["pow_Dc"]:
+        return exp_rate, 0.0
+    return exp_rate, math.exp(fit["pow_ln_A"] + fit["pow_gamma"] * math.log(fit["pow_Dc"] - D_m))
+
+
+def decision_probabilities(T, rate_e, rate_p, margin=1.0):
+    """One outlet observed for T flowing seconds, its jams n Poisson with the true law's mean.
+    The log-likelihood ratio of the two laws (no parameter refitted) is
+    n ln(rate_e / rate_p) - (rate_e - rate_p) T; it favours a law when it exceeds `margin`
+    (1: an AIC difference of 2) its way. Returns (P(exponential favoured | exponential true),
+    P(power law favoured | power law true))."""
+    mean_e, mean_p = rate_e * T, rate_p * T
+    hi = int(max(mean_e, mean_p) + 12 * math.sqrt(max(mean_e, mean_p)) + 30)
+    n = np.arange(hi + 1)
+    if rate_p == 0.0:  # beyond D_c: one jam rules the power law out
+        llr = np.where(n > 0, np.inf, -mean_e)
+    else:
+        llr = n * math.log(rate_e / rate_p) - (mean_e - mean_p)
+    p_e = float(stats.poisson.pmf(n, mean_e)[llr > margin].sum())
+    p_p = float(stats.poisson.pmf(n, mean_p)[llr < -margin].sum()) if rate_p > 0 else \
+        (1.0 if mean_e > margin else 0.0)
+    return p_e, p_p
+
+
+def flow_time_to_decide(rate_e, rate_p, power=0.95, margin=1.0, step=1.01, t_max=1e10):
+    """The shortest flowing time (on a grid of ratio `step`) after which each law, when true, is
+    favoured with probability >= power; None when not reached before t_max or the laws agree."""
+    if rate_e == rate_p:
+        return None
+    T = 0.1 / max(rate_e, rate_p)
+    while T < t_max:
+        p_e, p_p = decision_probabilities(T, rate_e, rate_p, margin)
+        if p_e >= power and p_p >= power:
+            return T
+        T *= step
+    return None
+
+
+def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95):
+    """Per fitted group of the store's jam-rate fits, per outlet: both laws' tau, the flowing
+    time that decides between them (flow_time_to_decide), the jams each law expects in it and
+    the core-hours at the store's cost per flowing second (worker time over flowing time, all
+    points) unless given."""
+    q = question_summary(s, path)
+    if core_s_per_flow_s is None:
+        flow = sum(r["flow_time"] for r in q["points"])
+        if flow <= 0:
+            raise ValueError("the store has no flowing time to measure the cost of a flowing second "
+                             "(give --core-s-per-flow-s)")
+        core_s_per_flow_s = 3600 * q["core_hours"] / flow
+    fits = [f for f in q["fits"].get("jam_rate", [])
+            if all(f.get(k) is not None for k in ("exp_ln_A", "exp_B", "pow_ln_A", "pow_Dc",
+                                                  "pow_gamma"))]
+    if not fits:
+        raise ValueError("the store has no jam-rate fit with both laws (run `campaign analyze` "
+                         "on it; the power law needs at least 4 outlets with jams)")
+    if outlets_cm is None:  # inside the measured range the laws agree to within their fit
+        top = max(r["D_cm"] for r in q["points"])
+        outlets_cm = [round(top + 0.1 * i, 6) for i in range(1, 11)]
+    groups = []
+    for f in fits:
+        rows = []
+        for D in outlets_cm:
+            rate_e, rate_p = law_rates(f, D / 100)
+            T = flow_time_to_decide(rate_e, rate_p, power)
+            rows.append({"D_cm": D, "tau_exponential": 1 / rate_e,
+                         "tau_power_law": 1 / rate_p if rate_p > 0 else None,
+                         "flow_time": T,
+                         "jams_exponential": rate_e * T if T else None,
+                         "jams_power_law": rate_p * T if T else None,
+                         "core_hours": T * core_s_per_flow_s / 3600 if T else None})
+        best = min((r for r in rows if r["core_hours"]), key=lambda r: r["core_hours"],
+                   default=None)
+        groups.append({"group": f.get("group"), "fit": f, "outlets": rows,
+                       "cheapest": best["D_cm"] if best else None})
+    return {"store": path, "power": power, "core_s_per_flow_s": core_s_per_flow_s,
+            "groups": groups}
+
+
+def plan_markdown(result):
+    out = []
+    for g in result["groups"]:
+        f = g["fit"]
+        out.append("Jam-rate laws of %s (`campaign analyze`): exponential B = %.3g per cm; power "
+                   "law D_c = %.3g cm, gamma = %.3g. Flowing time at one outlet after which each "
+                   "law, when true, is favoured by an AIC margin of 2 with probability %.2f; "
+                   "core-hours at %.3g core-s per flowing second:" % (
+                       g["group"] or "all points", f["exp_B"] / 100, f["pow_Dc"] * 100,
+                       f["pow_gamma"], result["power"], result["core_s_per_flow_s"]))
+        out.append("")
+        out.append("| D (cm) | tau exponential (s) | tau power law (s) | flowing time (s) | "
+                   "jams if exponential | jams if power law | core-hours |")
+        out.append("|---|---|---|---|---|---|---|")
+        for r in g["outlets"]:
+            out.append("| %.3g | %.3g | %s | %s | %s | %s | %s |%s" % (
+                r["D_cm"], r["tau_exponential"],
+                "%.3g" % r["tau_power_law"] if r["tau_power_law"] else "inf (D >= D_c)",
+                "%.3g" % r["flow_time"] if r["flow_time"] else "-",
+                "%.3g" % r["jams_exponential"] if r["flow_time"] else "-",
+                "%.3g" % r["jams_power_law"] if r["flow_time"] else "-",
+                "%.3g" % r["core_hours"] if r["core_hours"] else "-",
+                "  <- cheapest" if r["D_cm"] == g["cheapest"] else ""))
+        out.append("")
+        out.append("The laws are taken as fitted (their errors and a refit with the new outlet "
+                   "are left out): a plan, not a guarantee.")
+        out.append("")
+    return "\n".join(out)
+
+
+def plan(path, outlets, core_s, power, out, md):
+    with open_store(path) as s:
+        try:
+            result = plan_summary(s, path, outlets, core_s, power)
+        except ValueError as e:
+            sys.exit("clogging.py plan: %s: %s" % (path, e))
+    text = plan_markdown(result)
+    print(text, end="")
+    if out:
+        with open(out, "w") as fh:
+            json.dump(result, fh, indent=1)
+    if md:
+        with open(md, "w") as fh:
+            fh.write(text)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -430,6 +567,17 @@ def main():
     q.add_argument("store")
     q.add_argument("--json")
     q.add_argument("--md", help="write the table as Markdown too")
+    pl = sub.add_parser("plan")
+    pl.add_argument("store")
+    pl.add_argument("--outlets", help="outlets D in cm, comma-separated (default: the ten "
+                    "beyond the largest measured, in steps of 0.1 cm)")
+    pl.add_argument("--core-s-per-flow-s", type=float,
+                    help="cost of a flowing second (default: the store's worker time over its "
+                    "flowing time)")
+    pl.add_argument("--power", type=float, default=0.95,
+                    help="probability of favouring the true law (default %(default)s)")
+    pl.add_argument("--json")
+    pl.add_argument("--md", help="write the table as Markdown too")
     args = ap.parse_args()
     for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)]:
         if not os.path.exists(p):
@@ -438,6 +586,21 @@ def main():
         arrests(args.store, args.json)
     elif args.cmd == "question":
         question(args.store, args.json, args.md)
+    elif args.cmd == "plan":
+        try:
+            outlets = [float(v) for v in args.outlets.split(",")] if args.outlets else None
+        except ValueError:
+            sys.exit("clogging.py plan: --outlets must be numbers (cm) separated by commas, got %r"
+                     % args.outlets)
+        if outlets is not None and any(not (d > 0 and math.isfinite(d)) for d in outlets):
+            sys.exit("clogging.py plan: --outlets must be positive (cm), got %r" % args.outlets)
+        if not 0 < args.power < 1:
+            sys.exit("clogging.py plan: --power must lie between 0 and 1, got %g" % args.power)
+        if args.core_s_per_flow_s is not None and not (args.core_s_per_flow_s > 0 and
+                                                       math.isfinite(args.core_s_per_flow_s)):
+            sys.exit("clogging.py plan: --core-s-per-flow-s must be positive, got %g"
+                     % args.core_s_per_flow_s)
+        plan(args.store, outlets, args.core_s_per_flow_s, args.power, args.json, args.md)
     elif args.cmd == "levels":
         try:
             bins = [float(v) for v in args.bins.split(",")]

@@ -4,7 +4,8 @@
 status, tau (censored mean: flow time / jams) and jams per realization by group, and tau per
 interval after an ordinary shake and after a grown one, the comparison that does not select
 realizations by their number of jams; the published protocol's jams by fill level; the open
-question's table (bounds, core-hours, the store's fits in cm).
+question's table (bounds, core-hours, the store's fits in cm); the plan that would decide it
+(Poisson decision probabilities, the time to decide beyond D_c).
 
 usage: test_clogging.py SOURCE_DIR     (exit 0 pass, 1 fail, 77 skipped: no pandas/scipy)
 """
@@ -137,5 +138,43 @@ for want in ("> 26.7 (no jam)", "| 2.7 | 1 | 12 | 2 | 6 +- 4.2 [2.15, 49.5] | 39
              "AIC power law - exponential = +3.00", "preferred: exponential",
              "too few points to decide", "Core-hours in all (worker time): 1.20."):
     check(want in md, "markdown has %r:\n%s" % (want, md))
+
+# plan: one outlet observed for T = 3 s with rates 2/s (exponential) and 1/s (power law): the
+# log-likelihood ratio n ln 2 - 3 exceeds 1 for n >= 6 and falls below -1 for n <= 2, so
+# P(Poisson(6) >= 6) = 1 - e^-6 (1 + 6 + 18 + 36 + 54 + 64.8) = 0.554320 and
+# P(Poisson(3) <= 2) = e^-3 (1 + 3 + 4.5) = 0.423190.
+p_e, p_p = clogging.decision_probabilities(3.0, 2.0, 1.0)
+check(abs(p_e - 0.554320) < 1e-5 and abs(p_p - 0.423190) < 1e-5, "decision probabilities %s %s"
+      % (p_e, p_p))
+# Laws: ln lambda = 1 - 200 D, and (D_c - D)^3 with D_c = 4 cm; at 3 cm e^-5 and 1e-6; none
+# beyond D_c. There one jam decides: the exponential is favoured with probability 0.95 once
+# 1 - e^{-T/tau} >= 0.95, T = ln 20 tau, tau = e^7.2 = 1339.43 s at 4.1 cm: 4012.5 s (grid 1 %).
+law = {"exp_ln_A": 1.0, "exp_B": 200.0, "pow_ln_A": 0.0, "pow_Dc": 0.04, "pow_gamma": 3.0}
+r_e, r_p = clogging.law_rates(law, 0.03)
+check(abs(r_e - math.exp(-5)) < 1e-15 and abs(r_p - 1e-6) < 1e-18, "rates at 3 cm %s %s"
+      % (r_e, r_p))
+check(clogging.law_rates(law, 0.041)[1] == 0.0, "no power-law jams beyond D_c")
+T = clogging.flow_time_to_decide(math.exp(-7.2), 0.0)
+check(4012.5 <= T <= 4012.5 * 1.0101, "time to decide beyond D_c: %s" % T)
+try:
+    clogging.plan_summary(q_store, "synthetic")
+    check(False, "plan without a power-law fit must fail")
+except ValueError as e:
+    check("both laws" in str(e), "plan's error names the missing fit: %s" % e)
+q_store.jam_rate.loc[0, "pow_ln_A"] = 0.0
+pl = clogging.plan_summary(q_store, "synthetic")
+# Cost: 1.2 core-hours over 92 s of flow = 46.957 core-s per flowing second; the default outlets
+# are the ten beyond the largest measured (3.1 cm): 3.2 ... 4.1.
+check(abs(pl["core_s_per_flow_s"] - 1.2 * 3600 / 92) < 1e-9, "cost %s" % pl["core_s_per_flow_s"])
+rows = pl["groups"][0]["outlets"]
+check([r["D_cm"] for r in rows] == [3.2, 3.3, 3.4, 3.5, 3.6, 3.7, 3.8, 3.9, 4.0, 4.1],
+      "default outlets %s" % [r["D_cm"] for r in rows])
+r41 = rows[-1]
+check(r41["tau_power_law"] is None and 4012.5 <= r41["flow_time"] <= 4012.5 * 1.0101
+      and abs(r41["core_hours"] - r41["flow_time"] * 1.2 / 92) < 1e-9
+      and abs(r41["jams_exponential"] - math.log(20)) < 0.02,
+      "4.1 cm, beyond D_c: %s" % r41)
+md = clogging.plan_markdown(pl)
+check("inf (D >= D_c)" in md and "<- cheapest" in md, "plan's markdown:\n%s" % md)
 
 check.finish()
