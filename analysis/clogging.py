@@ -404,10 +404,8 @@ def question_markdown(result, target=0.1):
     return "\n".join(out) + "\n"
 
 
-def question(path, out, md):
-    with open_store(path) as s:
-        result = question_summary(s, path)
-    text = question_markdown(result)
+def emit(result, text, out, md):
+    """Print the Markdown text; write the result as JSON to `out` and the text to `md`, if given."""
     print(text, end="")
     if out:
         with open(out, "w") as fh:
@@ -415,6 +413,12 @@ def question(path, out, md):
     if md:
         with open(md, "w") as fh:
             fh.write(text)
+
+
+def question(path, out, md):
+    with open_store(path) as s:
+        result = question_summary(s, path)
+    emit(result, question_markdown(result), out, md)
 
 
 def law_rates(fit, D_m):
@@ -537,14 +541,7 @@ def plan(path, outlets, core_s, power, out, md):
             result = plan_summary(s, path, outlets, core_s, power)
         except ValueError as e:
             sys.exit("clogging.py plan: %s: %s" % (path, e))
-    text = plan_markdown(result)
-    print(text, end="")
-    if out:
-        with open(out, "w") as fh:
-            json.dump(result, fh, indent=1)
-    if md:
-        with open(md, "w") as fh:
-            fh.write(text)
+    emit(result, plan_markdown(result), out, md)
 
 
 def main():
