@@ -66,11 +66,23 @@ def z_of(a, b):
     return (a["mean"] - b["mean"]) / math.hypot(a["se"], b["se"])
 
 
+def sig(x, digits=3):
+    """x to `digits` significant digits, like %g but without an exponent between 1e-3 and 1e7
+    (1200, not 1.2e+03; 140 000 reads 140000)."""
+    if x == 0 or not math.isfinite(x) or not 1e-3 <= abs(x) < 1e7:
+        return "%.*g" % (digits, x)
+    dec = digits - 1 - math.floor(math.log10(abs(x)))
+    if abs(round(x, dec)) >= 10 ** (digits - dec):  # rounding carried into the next decade
+        dec -= 1
+    text = "%.*f" % (max(dec, 0), round(x, dec))
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
 def fmt(e, digits=3):
     if e["mean"] is None:
-        return "> %.*g (no jam)" % (digits, e["lo"])
-    return "%.*g +- %.*g [%.*g, %.*g]" % (digits, e["mean"], 2, e["se"], digits, e["lo"], digits,
-                                         e["hi"])
+        return "> %s (no jam)" % sig(e["lo"], digits)
+    return "%s +- %s [%s, %s]" % (sig(e["mean"], digits), sig(e["se"], 2), sig(e["lo"], digits),
+                                  sig(e["hi"], digits))
 
 
 def particle_steps(store):
@@ -379,8 +391,8 @@ def question_markdown(result, target=0.1):
             row["D_cm"], row["realizations"], row["flow_time"], row["tau"]["jams"],
             fmt(row["tau"]),
             "%.0f %%%s" % (100 * half, " (met)" if half <= target else "") if half else "-",
-            ("%.3g +- %.2g" % (ms["mean"], ms["se"]) if ms and ms["mean"] is not None else
-             "> %.3g" % ms["lo"] if ms else "-"),
+            ("%s +- %s" % (sig(ms["mean"]), sig(ms["se"], 2)) if ms and ms["mean"] is not None
+             else "> %s" % sig(ms["lo"]) if ms else "-"),
             row["core_hours"],
             "%.3g" % row["core_hours_per_jam"] if row["core_hours_per_jam"] else "-"))
     out.append("")
@@ -520,13 +532,13 @@ def plan_markdown(result):
                    "jams if exponential | jams if power law | core-hours |")
         out.append("|---|---|---|---|---|---|---|")
         for r in g["outlets"]:
-            out.append("| %.3g | %.3g | %s | %s | %s | %s | %s |%s" % (
-                r["D_cm"], r["tau_exponential"],
-                "%.3g" % r["tau_power_law"] if r["tau_power_law"] else "inf (D >= D_c)",
-                "%.3g" % r["flow_time"] if r["flow_time"] else "-",
-                "%.3g" % r["jams_exponential"] if r["flow_time"] else "-",
-                "%.3g" % r["jams_power_law"] if r["flow_time"] else "-",
-                "%.3g" % r["core_hours"] if r["core_hours"] else "-",
+            out.append("| %.3g | %s | %s | %s | %s | %s | %s |%s" % (
+                r["D_cm"], sig(r["tau_exponential"]),
+                sig(r["tau_power_law"]) if r["tau_power_law"] else "inf (D >= D_c)",
+                sig(r["flow_time"]) if r["flow_time"] else "-",
+                sig(r["jams_exponential"]) if r["flow_time"] else "-",
+                sig(r["jams_power_law"]) if r["flow_time"] else "-",
+                sig(r["core_hours"]) if r["core_hours"] else "-",
                 "  <- cheapest" if r["D_cm"] == g["cheapest"] else ""))
         out.append("")
         out.append("The laws are taken as fitted (their errors and a refit with the new outlet "

@@ -177,4 +177,11 @@ check(r41["tau_power_law"] is None and 4012.5 <= r41["flow_time"] <= 4012.5 * 1.
 md = clogging.plan_markdown(pl)
 check("inf (D >= D_c)" in md and "<- cheapest" in md, "plan's markdown:\n%s" % md)
 
+# Numbers in the tables: three significant digits without an exponent between 1e-3 and 1e7.
+for x, d, want in ((1196.5, 3, "1200"), (144.0, 2, "140"), (5.7369, 3, "5.74"), (6.0, 3, "6"),
+                   (9.996, 3, "10"), (15800.0, 3, "15800"), (1.4e7, 3, "1.4e+07"),
+                   (0.00469, 3, "0.00469")):
+    check(clogging.sig(x, d) == want, "sig(%r, %d) = %r, want %r" % (x, d, clogging.sig(x, d), want))
+check("| 300 +- 210 |" in clogging.question_markdown(q), "<s> without an exponent")
+
 check.finish()
