@@ -20,8 +20,9 @@ usage:
       what would decide the open question: with the store's two fitted laws of the jam rate
       (exponential and power law, `campaign analyze`) taken as they are, for each outlet D the
       flowing time after which one outlet's jam count favours the true law by an AIC margin of
-      2 with the given probability under either law, the jams each law expects there and the
-      core-hours at the store's measured cost per flowing second
+      2 with the given probability under either law, the jams each law expects there, the
+      core-hours at the store's measured cost per flowing second, and what the store already
+      holds there (default outlets: the ten beyond the largest one with a jam)
   clogging.py heads PUBLISHED.h5 STEADY.h5 [--ns-per-particle-step LABEL=NS ...] [--json OUT]
       per point of both stores: jams, tau [95 % CI], <s> +- se, particle-steps per jam (the
       work, independent of the machine's load) and, where a point's CPU cost per particle-step
@@ -494,23 +495,31 @@ def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95):
     if not fits:
         raise ValueError("the store has no jam-rate fit with both laws (run `campaign analyze` "
                          "on it; the power law needs at least 4 outlets with jams)")
-    if outlets_cm is None:  # inside the measured range the laws agree to within their fit
-        top = max(r["D_cm"] for r in q["points"])
-        outlets_cm = [round(top + 0.1 * i, 6) for i in range(1, 11)]
+    if outlets_cm is None:  # where jams were seen the laws agree to within their fit
+        jammed = [r["D_cm"] for r in q["points"] if r["tau"]["jams"] > 0]
+        if not jammed:
+            raise ValueError("no outlet of the store has a jam (give --outlets)")
+        outlets_cm = [round(max(jammed) + 0.1 * i, 6) for i in range(1, 11)]
     groups = []
     for f in fits:
         rows = []
         for D in outlets_cm:
             rate_e, rate_p = law_rates(f, D / 100)
             T = flow_time_to_decide(rate_e, rate_p, power)
+            here = [r for r in q["points"] if abs(r["D_cm"] - D) < 1e-6]
+            flown = sum(r["flow_time"] for r in here)
+            to_go = max(T - flown, 0.0) if T else None
             rows.append({"D_cm": D, "tau_exponential": 1 / rate_e,
                          "tau_power_law": 1 / rate_p if rate_p > 0 else None,
                          "flow_time": T,
                          "jams_exponential": rate_e * T if T else None,
                          "jams_power_law": rate_p * T if T else None,
-                         "core_hours": T * core_s_per_flow_s / 3600 if T else None})
-        best = min((r for r in rows if r["core_hours"]), key=lambda r: r["core_hours"],
-                   default=None)
+                         "core_hours": T * core_s_per_flow_s / 3600 if T else None,
+                         "flow_measured": flown,
+                         "jams_measured": sum(r["tau"]["jams"] for r in here),
+                         "core_hours_to_go": to_go * core_s_per_flow_s / 3600 if T else None})
+        best = min((r for r in rows if r["core_hours_to_go"] is not None),
+                   key=lambda r: r["core_hours_to_go"], default=None)
         groups.append({"group": f.get("group"), "fit": f, "outlets": rows,
                        "cheapest": best["D_cm"] if best else None})
     return {"store": path, "power": power, "core_s_per_flow_s": core_s_per_flow_s,
@@ -529,20 +538,25 @@ def plan_markdown(result):
                        f["pow_gamma"], result["power"], result["core_s_per_flow_s"]))
         out.append("")
         out.append("| D (cm) | tau exponential (s) | tau power law (s) | flowing time (s) | "
-                   "jams if exponential | jams if power law | core-hours |")
-        out.append("|---|---|---|---|---|---|---|")
+                   "jams if exponential | jams if power law | core-hours | measured: flow (s), "
+                   "jams | core-hours to go |")
+        out.append("|---|---|---|---|---|---|---|---|---|")
         for r in g["outlets"]:
-            out.append("| %.3g | %s | %s | %s | %s | %s | %s |%s" % (
+            out.append("| %.3g | %s | %s | %s | %s | %s | %s | %s | %s |%s" % (
                 r["D_cm"], sig(r["tau_exponential"]),
                 sig(r["tau_power_law"]) if r["tau_power_law"] else "inf (D >= D_c)",
                 sig(r["flow_time"]) if r["flow_time"] else "-",
                 sig(r["jams_exponential"]) if r["flow_time"] else "-",
                 sig(r["jams_power_law"]) if r["flow_time"] else "-",
                 sig(r["core_hours"]) if r["core_hours"] else "-",
+                "%.0f, %d" % (r["flow_measured"], r["jams_measured"]) if r["flow_measured"]
+                else "-",
+                sig(r["core_hours_to_go"]) if r["core_hours_to_go"] is not None else "-",
                 "  <- cheapest" if r["D_cm"] == g["cheapest"] else ""))
         out.append("")
         out.append("The laws are taken as fitted (their errors and a refit with the new outlet "
-                   "are left out): a plan, not a guarantee.")
+                   "are left out): a plan, not a guarantee. To go: the flowing time still "
+                   "missing after what the store holds at that outlet.")
         out.append("")
     return "\n".join(out)
 
@@ -579,7 +593,7 @@ def main():
     pl = sub.add_parser("plan")
     pl.add_argument("store")
     pl.add_argument("--outlets", help="outlets D in cm, comma-separated (default: the ten "
-                    "beyond the largest measured, in steps of 0.1 cm)")
+                    "beyond the largest with a jam, in steps of 0.1 cm)")
     pl.add_argument("--core-s-per-flow-s", type=float,
                     help="cost of a flowing second (default: the store's worker time over its "
                     "flowing time)")

@@ -164,18 +164,25 @@ except ValueError as e:
 q_store.jam_rate.loc[0, "pow_ln_A"] = 0.0
 pl = clogging.plan_summary(q_store, "synthetic")
 # Cost: 1.2 core-hours over 92 s of flow = 46.957 core-s per flowing second; the default outlets
-# are the ten beyond the largest measured (3.1 cm): 3.2 ... 4.1.
+# are the ten beyond the largest with a jam (2.7 cm): 2.8 ... 3.7.
 check(abs(pl["core_s_per_flow_s"] - 1.2 * 3600 / 92) < 1e-9, "cost %s" % pl["core_s_per_flow_s"])
 rows = pl["groups"][0]["outlets"]
-check([r["D_cm"] for r in rows] == [3.2, 3.3, 3.4, 3.5, 3.6, 3.7, 3.8, 3.9, 4.0, 4.1],
+check([r["D_cm"] for r in rows] == [2.8, 2.9, 3.0, 3.1, 3.2, 3.3, 3.4, 3.5, 3.6, 3.7],
       "default outlets %s" % [r["D_cm"] for r in rows])
-r41 = rows[-1]
+r31 = rows[3]
+check(r31["flow_measured"] == 80.0 and r31["jams_measured"] == 0
+      and abs(r31["core_hours_to_go"] - (r31["flow_time"] - 80.0) * 1.2 / 92) < 1e-9,
+      "3.1 cm holds 80 s without a jam: %s" % r31)
+pl41 = clogging.plan_summary(q_store, "synthetic", [4.1])
+r41 = pl41["groups"][0]["outlets"][0]
 check(r41["tau_power_law"] is None and 4012.5 <= r41["flow_time"] <= 4012.5 * 1.0101
       and abs(r41["core_hours"] - r41["flow_time"] * 1.2 / 92) < 1e-9
+      and r41["core_hours_to_go"] == r41["core_hours"] and r41["flow_measured"] == 0
       and abs(r41["jams_exponential"] - math.log(20)) < 0.02,
       "4.1 cm, beyond D_c: %s" % r41)
 md = clogging.plan_markdown(pl)
-check("inf (D >= D_c)" in md and "<- cheapest" in md, "plan's markdown:\n%s" % md)
+check("| 80, 0 |" in md and "<- cheapest" in md, "plan's markdown:\n%s" % md)
+check("inf (D >= D_c)" in clogging.plan_markdown(pl41), "beyond D_c in the markdown")
 
 # Numbers in the tables: three significant digits without an exponent between 1e-3 and 1e7.
 for x, d, want in ((1196.5, 3, "1200"), (144.0, 2, "140"), (5.7369, 3, "5.74"), (6.0, 3, "6"),
