@@ -9,16 +9,18 @@ usage:
       the published protocol's tau by fill level: per bin of particles in the hopper, the
       flowing time spent there (discharge curve) and the jams whose onset fell there; what a
       steady state of that many particles is to be compared with
-  clogging.py question STORE.h5 [--json OUT] [--md OUT]
+  clogging.py question STORE.h5 [--json OUT] [--md OUT] [--png OUT]
       the open question's table (campaigns/open-question/survival.toml): per outlet D, the
       realizations, flowing time, jams, tau [95 % CI] (a 95 % lower bound where no jam),
       <s> +- se, tau's relative 95 % half-width against the campaign's +-10 %, and the worker
       core-hours (per point and per jam); then the store's own fits of the jam rate and of <s>
       versus D (`campaign analyze`: exponential against power law, the AIC verdict)
-  clogging.py plan STORE.h5 [--outlets 3.6,3.7,...] [--core-s-per-flow-s X] [--power 0.95]
+  clogging.py plan STORE.h5 [--outlets 3.6,...] [--fit poisson|store] [--dc CM] [--core-s-per-flow-s X]
+                  [--power 0.95]
                   [--json OUT] [--md OUT]
       what would decide the open question: with the store's two fitted laws of the jam rate
-      (exponential and power law, `campaign analyze`) taken as they are, for each outlet D the
+      (exponential and power law; the Poisson fit over every outlet, or with --fit store
+      `campaign analyze`'s) taken as they are, for each outlet D the
       flowing time after which one outlet's jam count favours the true law by an AIC margin of
       2 with the given probability under either law, the jams each law expects there, the
       core-hours at the store's measured cost per flowing second, and what the store already
@@ -376,8 +378,100 @@ def question_summary(s, path):
                                v.item() if hasattr(v, "item") else v)
                            for k, v in row.items() if not str(k).startswith("has_")}
                           for _, row in table.iterrows()]
-    return {"store": path, "points": rows, "fits": fits,
+    return {"store": path, "points": rows, "fits": fits, "poisson_fit": poisson_fits(rows),
             "core_hours": sum(row["core_hours"] for row in rows)}
+
+
+def _poisson_glm(X, n, T):
+    """Maximum of sum n ln(lambda T) - lambda T with ln lambda = X beta (Newton; the Poisson
+    log-likelihood with a log link is concave). Returns (beta, log-likelihood without the
+    n-only constant)."""
+    from scipy import optimize
+    X, n, T = (np.asarray(v, float) for v in (X, n, T))
+
+    def neg(beta):
+        eta = X @ beta
+        lam_t = np.exp(eta) * T
+        return -(n @ eta - lam_t.sum()), -(X.T @ (n - lam_t))
+
+    start = np.zeros(X.shape[1])
+    start[0] = math.log(max(n.sum(), 0.5) / T.sum())
+    res = optimize.minimize(neg, start, jac=True, method="BFGS", options={"gtol": 1e-10})
+    beta = res.x
+    eta = X @ beta
+    return beta, float(n @ (eta + np.log(T)) - (np.exp(eta) * T).sum())
+
+
+def poisson_fits(points, dc_span_m=0.5, dc_fixed_m=None):
+    """The jam rate against D fitted to every outlet's jam count and flowing time (Poisson, so
+    an outlet without a jam counts too, unlike the least-squares fit of `campaign analyze`
+    that leaves it out): exponential ln lambda = ln A - B D, and power law ln lambda = ln A +
+    gamma ln(D_c - D), zero at and beyond D_c, profiled over D_c from just above the largest
+    outlet with a jam to dc_span_m beyond it. AIC = -2 ln L + 2 k (k = 2, 3). Keys as the
+    store's fits (SI: B per m, D_c in m); a best D_c at the scan's far end means no finite D_c.
+    With dc_fixed_m the power law's D_c is that one (the alternative to test; k = 2 then), the
+    rest as is."""
+    D = np.array([p["D_cm"] / 100 for p in points])
+    n = np.array([p["tau"]["jams"] for p in points], float)
+    T = np.array([p["flow_time"] for p in points], float)
+    if (n > 0).sum() < 2 or len(points) < 3:
+        return {"reason": "too few outlets (needs 3, 2 with jams)"}
+    beta, ll_e = _poisson_glm(np.column_stack([np.ones_like(D), -D]), n, T)
+    out = {"n_points": len(points), "exp_ln_A": float(beta[0]), "exp_B": float(beta[1]),
+           "exp_lnL": ll_e, "exp_aic": -2 * ll_e + 4}
+    top = D[n > 0].max()
+    profile = []
+    for dc in top + np.geomspace(1e-4, dc_span_m, 400):
+        inside = D < dc
+        b, ll = _poisson_glm(np.column_stack([np.ones(inside.sum()),
+                                              np.log(dc - D[inside])]), n[inside], T[inside])
+        profile.append((dc, b, ll))
+    dc, b, ll = max(profile, key=lambda t: t[2])
+    # The profile likelihood's 95 % lower bound on D_c: the smallest D_c with
+    # 2 (ln L_best - ln L(D_c)) < chi2_{0.95}(1) = 3.84.
+    allowed = [t[0] for t in profile if 2 * (ll - t[2]) < stats.chi2.ppf(0.95, 1)]
+    out["pow_Dc_lower_95"] = float(min(allowed))
+    if dc_fixed_m is not None:
+        if dc_fixed_m <= top:
+            return {"reason": "D_c = %.3g cm is not above the largest outlet with a jam (%.3g cm)"
+                    % (dc_fixed_m * 100, top * 100)}
+        inside = D < dc_fixed_m
+        b, ll_fixed = _poisson_glm(np.column_stack([np.ones(inside.sum()),
+                                                    np.log(dc_fixed_m - D[inside])]),
+                                   n[inside], T[inside])
+        dc, ll = dc_fixed_m, ll_fixed
+        out["pow_Dc_fixed"] = True
+    out.update({"pow_Dc": float(dc), "pow_ln_A": float(b[0]), "pow_gamma": float(b[1]),
+                "pow_lnL": ll, "pow_aic": -2 * ll + (4 if dc_fixed_m is not None else 6),
+                "pow_Dc_at_scan_end": bool(dc >= top + 0.99 * dc_span_m)})
+    d_aic = out["pow_aic"] - out["exp_aic"]
+    if dc_fixed_m is not None:
+        out["preferred"] = "power law" if d_aic < -2 else "exponential" if d_aic > 2 else \
+            "undecided"
+        out["decision"] = "D_c fixed at %.3g cm: AIC power law - exponential = %+.2f" % (
+            dc_fixed_m * 100, d_aic)
+    elif out["pow_Dc_at_scan_end"]:
+        out["preferred"] = "exponential"
+        out["decision"] = ("the power law's best D_c is the scan's far end (%.3g cm beyond the "
+                           "largest jamming outlet): no finite D_c" % (dc_span_m * 100))
+    elif abs(d_aic) <= 2:
+        out["preferred"] = "undecided"
+        out["decision"] = "|Delta AIC| <= 2: the data do not distinguish the two laws"
+    else:
+        out["preferred"] = "power law" if d_aic < 0 else "exponential"
+        out["decision"] = "AIC power law - exponential = %+.2f" % d_aic
+    return out
+
+
+def poisson_markdown(f):
+    if "exp_B" not in f:
+        return "Poisson fit of the jam rate: %s." % f.get("reason")
+    return ("Poisson fit of the jam rate (%d outlets, those without a jam included): exponential B "
+            "= %.3g per cm; power law best D_c = %.3g cm (gamma = %.3g), a critical outlet below "
+            "%.3g cm excluded at 95 %% (profile likelihood); AIC power law - exponential = %+.2f; "
+            "preferred: %s; %s." % (f["n_points"], f["exp_B"] / 100, f["pow_Dc"] * 100,
+                                    f["pow_gamma"], f["pow_Dc_lower_95"] * 100,
+                                    f["pow_aic"] - f["exp_aic"], f["preferred"], f["decision"]))
 
 
 def question_markdown(result, target=0.1):
@@ -414,6 +508,8 @@ def question_markdown(result, target=0.1):
             out.append("Fit of the %s versus D (%s, %d outlets): %spreferred: %s; %s." % (
                 what, f.get("group") or "all points", f.get("n_points", 0),
                 "; ".join(parts) + "; " if parts else "", f.get("preferred"), f.get("decision")))
+    if "poisson_fit" in result:
+        out += ["", poisson_markdown(result["poisson_fit"])]
     return "\n".join(out) + "\n"
 
 
@@ -428,10 +524,57 @@ def emit(result, text, out, md):
             fh.write(text)
 
 
-def question(path, out, md):
+def question_figure(result, png, dc_cm=5.0):
+    """The jam rate against D (rate with its 95 % interval; a 95 % upper bound where no jam) with
+    the Poisson fits: the exponential, the best power law and the power law with D_c fixed at
+    dc_cm, each with its AIC."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    pts = result["points"]
+    f = result["poisson_fit"]
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for r in pts:
+        t = r["tau"]
+        if t["jams"]:
+            ax.errorbar(r["D_cm"], 1 / t["mean"], yerr=[[1 / t["mean"] - 1 / t["hi"]],
+                                                        [1 / t["lo"] - 1 / t["mean"]]],
+                        fmt="o", color="C0", capsize=3)
+        else:
+            ax.errorbar(r["D_cm"], 1 / t["lo"], yerr=[[0.5 / t["lo"]], [0]], uplims=True,
+                        fmt="v", color="C0", mfc="white", capsize=3)
+    if "exp_B" in f:
+        D = np.linspace(min(r["D_cm"] for r in pts), max(r["D_cm"] for r in pts) + 0.6, 300)
+        fixed = poisson_fits(pts, dc_fixed_m=dc_cm / 100)
+        ax.plot(D, np.exp(f["exp_ln_A"] - f["exp_B"] * D / 100), color="C1",
+                label="exponential, B = %.2f/cm (AIC 0)" % (f["exp_B"] / 100))
+        for g, style, what in ((f, "--", "best power law"), (fixed, ":", "power law")):
+            if "pow_Dc" not in g:
+                continue
+            Dm = D[D / 100 < g["pow_Dc"]] / 100
+            ax.plot(Dm * 100, np.exp(g["pow_ln_A"] + g["pow_gamma"] * np.log(g["pow_Dc"] - Dm)),
+                    style, color="C2" if style == "--" else "C3",
+                    label="%s, D_c = %.3g cm (AIC %+.1f)" % (what, g["pow_Dc"] * 100,
+                                                             g["pow_aic"] - g["exp_aic"]))
+        ax.set_title("critical outlet below %.3g cm excluded at 95 %%" % (f["pow_Dc_lower_95"] * 100),
+                     fontsize=10)
+    ax.set_yscale("log")
+    rates = [1 / (r["tau"]["hi"] or r["tau"]["lo"] * 2) for r in pts]
+    ax.set_ylim(min(rates) / 100, 2 * max(1 / r["tau"]["lo"] for r in pts))
+    ax.set_xlabel("D (cm)")
+    ax.set_ylabel("jam rate 1/tau (1/s)")
+    ax.legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def question(path, out, md, png=None):
     with open_store(path) as s:
         result = question_summary(s, path)
     emit(result, question_markdown(result), out, md)
+    if png:
+        question_figure(result, png)
 
 
 def law_rates(fit, D_m):
@@ -477,7 +620,8 @@ def flow_time_to_decide(rate_e, rate_p, power=0.95, margin=1.0, step=1.01, t_max
     return None
 
 
-def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95):
+def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95, fit="poisson",
+                 dc_cm=None):
     """Per fitted group of the store's jam-rate fits, per outlet: both laws' tau, the flowing
     time that decides between them (flow_time_to_decide), the jams each law expects in it and
     the core-hours at the store's cost per flowing second (worker time over flowing time, all
@@ -489,12 +633,18 @@ def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95):
             raise ValueError("the store has no flowing time to measure the cost of a flowing second "
                              "(give --core-s-per-flow-s)")
         core_s_per_flow_s = 3600 * q["core_hours"] / flow
-    fits = [f for f in q["fits"].get("jam_rate", [])
+    if fit == "poisson" and dc_cm is not None:
+        q["poisson_fit"] = poisson_fits(q["points"], dc_fixed_m=dc_cm / 100)
+    candidates = ([dict(q["poisson_fit"], group="the Poisson fit over every outlet%s" % (
+        ", D_c fixed at %.3g cm" % dc_cm if dc_cm is not None else ""))] if fit == "poisson"
+        else q["fits"].get("jam_rate", []))
+    fits = [f for f in candidates
             if all(f.get(k) is not None for k in ("exp_ln_A", "exp_B", "pow_ln_A", "pow_Dc",
                                                   "pow_gamma"))]
     if not fits:
-        raise ValueError("the store has no jam-rate fit with both laws (run `campaign analyze` "
-                         "on it; the power law needs at least 4 outlets with jams)")
+        raise ValueError("no jam-rate fit with both laws (%s)" % (
+            q["poisson_fit"].get("reason") if fit == "poisson" else
+            "run `campaign analyze` on the store; its power law needs 4 outlets with jams"))
     if outlets_cm is None:  # where jams were seen the laws agree to within their fit
         jammed = [r["D_cm"] for r in q["points"] if r["tau"]["jams"] > 0]
         if not jammed:
@@ -530,7 +680,7 @@ def plan_markdown(result):
     out = []
     for g in result["groups"]:
         f = g["fit"]
-        out.append("Jam-rate laws of %s (`campaign analyze`): exponential B = %.3g per cm; power "
+        out.append("Jam-rate laws of %s: exponential B = %.3g per cm; power "
                    "law D_c = %.3g cm, gamma = %.3g. Flowing time at one outlet after which each "
                    "law, when true, is favoured by an AIC margin of 2 with probability %.2f; "
                    "core-hours at %.3g core-s per flowing second:" % (
@@ -561,10 +711,10 @@ def plan_markdown(result):
     return "\n".join(out)
 
 
-def plan(path, outlets, core_s, power, out, md):
+def plan(path, outlets, core_s, power, fit, dc, out, md):
     with open_store(path) as s:
         try:
-            result = plan_summary(s, path, outlets, core_s, power)
+            result = plan_summary(s, path, outlets, core_s, power, fit, dc)
         except ValueError as e:
             sys.exit("clogging.py plan: %s: %s" % (path, e))
     emit(result, plan_markdown(result), out, md)
@@ -590,6 +740,7 @@ def main():
     q.add_argument("store")
     q.add_argument("--json")
     q.add_argument("--md", help="write the table as Markdown too")
+    q.add_argument("--png", help="draw the jam rate with the Poisson fits (matplotlib)")
     pl = sub.add_parser("plan")
     pl.add_argument("store")
     pl.add_argument("--outlets", help="outlets D in cm, comma-separated (default: the ten "
@@ -599,6 +750,11 @@ def main():
                     "flowing time)")
     pl.add_argument("--power", type=float, default=0.95,
                     help="probability of favouring the true law (default %(default)s)")
+    pl.add_argument("--fit", choices=("poisson", "store"), default="poisson",
+                    help="the laws: the Poisson fit over every outlet (default) or the store's "
+                    "own (`campaign analyze`, outlets without a jam left out)")
+    pl.add_argument("--dc", type=float, help="test the exponential against the power law with "
+                    "this critical outlet (cm) instead of the best-fitting one")
     pl.add_argument("--json")
     pl.add_argument("--md", help="write the table as Markdown too")
     args = ap.parse_args()
@@ -608,7 +764,7 @@ def main():
     if args.cmd == "arrests":
         arrests(args.store, args.json)
     elif args.cmd == "question":
-        question(args.store, args.json, args.md)
+        question(args.store, args.json, args.md, args.png)
     elif args.cmd == "plan":
         try:
             outlets = [float(v) for v in args.outlets.split(",")] if args.outlets else None
@@ -623,7 +779,10 @@ def main():
                                                        math.isfinite(args.core_s_per_flow_s)):
             sys.exit("clogging.py plan: --core-s-per-flow-s must be positive, got %g"
                      % args.core_s_per_flow_s)
-        plan(args.store, outlets, args.core_s_per_flow_s, args.power, args.json, args.md)
+        if args.dc is not None and (args.fit != "poisson" or not args.dc > 0):
+            sys.exit("clogging.py plan: --dc takes a positive D_c in cm, with --fit poisson")
+        plan(args.store, outlets, args.core_s_per_flow_s, args.power, args.fit, args.dc,
+             args.json, args.md)
     elif args.cmd == "levels":
         try:
             bins = [float(v) for v in args.bins.split(",")]

@@ -157,12 +157,12 @@ check(clogging.law_rates(law, 0.041)[1] == 0.0, "no power-law jams beyond D_c")
 T = clogging.flow_time_to_decide(math.exp(-7.2), 0.0)
 check(4012.5 <= T <= 4012.5 * 1.0101, "time to decide beyond D_c: %s" % T)
 try:
-    clogging.plan_summary(q_store, "synthetic")
+    clogging.plan_summary(q_store, "synthetic", fit="store")
     check(False, "plan without a power-law fit must fail")
 except ValueError as e:
-    check("both laws" in str(e), "plan's error names the missing fit: %s" % e)
+    check("4 outlets with jams" in str(e), "plan's error names the missing fit: %s" % e)
 q_store.jam_rate.loc[0, "pow_ln_A"] = 0.0
-pl = clogging.plan_summary(q_store, "synthetic")
+pl = clogging.plan_summary(q_store, "synthetic", fit="store")
 # Cost: 1.2 core-hours over 92 s of flow = 46.957 core-s per flowing second; the default outlets
 # are the ten beyond the largest with a jam (2.7 cm): 2.8 ... 3.7.
 check(abs(pl["core_s_per_flow_s"] - 1.2 * 3600 / 92) < 1e-9, "cost %s" % pl["core_s_per_flow_s"])
@@ -173,7 +173,7 @@ r31 = rows[3]
 check(r31["flow_measured"] == 80.0 and r31["jams_measured"] == 0
       and abs(r31["core_hours_to_go"] - (r31["flow_time"] - 80.0) * 1.2 / 92) < 1e-9,
       "3.1 cm holds 80 s without a jam: %s" % r31)
-pl41 = clogging.plan_summary(q_store, "synthetic", [4.1])
+pl41 = clogging.plan_summary(q_store, "synthetic", [4.1], fit="store")
 r41 = pl41["groups"][0]["outlets"][0]
 check(r41["tau_power_law"] is None and 4012.5 <= r41["flow_time"] <= 4012.5 * 1.0101
       and abs(r41["core_hours"] - r41["flow_time"] * 1.2 / 92) < 1e-9
@@ -190,5 +190,33 @@ for x, d, want in ((1196.5, 3, "1200"), (144.0, 2, "140"), (5.7369, 3, "5.74"), 
                    (0.00469, 3, "0.00469")):
     check(clogging.sig(x, d) == want, "sig(%r, %d) = %r, want %r" % (x, d, clogging.sig(x, d), want))
 check("| 300 +- 210 |" in clogging.question_markdown(q), "<s> without an exponent")
+
+# Poisson fit: two outlets with jams and one without. With only the two, the exponential passes
+# through both rates: 8 jams in 100 s at 2.7 cm and 2 in 100 s at 3.1 cm give
+# B = ln 4 / 0.004 m = 346.57 per m, ln A = ln 0.08 + 2.7 B / 100 (hand).
+two = [{"D_cm": 2.7, "flow_time": 100.0, "tau": {"jams": 8}},
+       {"D_cm": 3.1, "flow_time": 100.0, "tau": {"jams": 2}}]
+check("reason" in clogging.poisson_fits(two), "two outlets are too few")
+with_zero = two + [{"D_cm": 3.5, "flow_time": 100.0, "tau": {"jams": 0}}]
+pf = clogging.poisson_fits(with_zero)
+# The outlet without a jam pulls the law down: B larger than through the two alone, and the
+# rate at 3.5 cm below 2 x (1/4) / 100 s (the two-point law's extrapolation).
+B2 = math.log(4) / 0.004
+check(pf["exp_B"] > B2 and math.exp(pf["exp_ln_A"] - pf["exp_B"] * 0.035) < 0.005,
+      "a jamless outlet steepens the fit: B %s against %s" % (pf["exp_B"], B2))
+# Exact: for the exponential the score equations are sum n = sum lambda T and
+# sum n D = sum lambda T D: 10 jams and 0.027 m x 8 + 0.031 m x 2 = 0.278 m.
+lam_t = [math.exp(pf["exp_ln_A"] - pf["exp_B"] * p["D_cm"] / 100) * 100 for p in with_zero]
+check(abs(sum(lam_t) - 10) < 1e-5 and
+      abs(sum(l * p["D_cm"] / 100 for l, p in zip(lam_t, with_zero)) - 0.278) < 1e-6,
+      "score equations: %s" % lam_t)
+check(pf["pow_Dc"] > 0.031 and pf["pow_Dc_lower_95"] <= pf["pow_Dc"] and pf["preferred"] in
+      ("exponential", "power law", "undecided"), "power law: %s" % pf)
+check("those without a jam included" in clogging.poisson_markdown(pf), "Poisson markdown")
+pf5 = clogging.poisson_fits(with_zero, dc_fixed_m=0.05)
+check(pf5["pow_Dc"] == 0.05 and pf5.get("pow_Dc_fixed") and "D_c fixed at 5 cm" in pf5["decision"]
+      and pf5["exp_B"] == pf["exp_B"] and pf5["pow_lnL"] <= pf["pow_lnL"] + 1e-9,
+      "power law at a fixed D_c: %s" % pf5)
+check("reason" in clogging.poisson_fits(with_zero, dc_fixed_m=0.03), "D_c below a jamming outlet")
 
 check.finish()
