@@ -383,9 +383,9 @@ def question_summary(s, path):
 
 
 def _poisson_glm(X, n, T):
-    """Maximum of sum n ln(lambda T) - lambda T with ln lambda = X beta (Newton; the Poisson
-    log-likelihood with a log link is concave). Returns (beta, log-likelihood without the
-    n-only constant)."""
+    """Maximum of sum n ln(lambda T) - lambda T with ln lambda = X beta (BFGS with the analytic
+    gradient; the Poisson log-likelihood with a log link is concave). Returns (beta,
+    log-likelihood without the n-only constant)."""
     from scipy import optimize
     X, n, T = (np.asarray(v, float) for v in (X, n, T))
 
@@ -420,26 +420,24 @@ def poisson_fits(points, dc_span_m=0.5, dc_fixed_m=None):
     out = {"n_points": len(points), "exp_ln_A": float(beta[0]), "exp_B": float(beta[1]),
            "exp_lnL": ll_e, "exp_aic": -2 * ll_e + 4}
     top = D[n > 0].max()
-    profile = []
-    for dc in top + np.geomspace(1e-4, dc_span_m, 400):
+    if dc_fixed_m is not None and dc_fixed_m <= top:
+        return {"reason": "D_c = %.3g cm is not above the largest outlet with a jam (%.3g cm)"
+                % (dc_fixed_m * 100, top * 100)}
+
+    def power_law_at(dc):  # outlets at and beyond D_c expect no jam and add nothing
         inside = D < dc
-        b, ll = _poisson_glm(np.column_stack([np.ones(inside.sum()),
-                                              np.log(dc - D[inside])]), n[inside], T[inside])
-        profile.append((dc, b, ll))
+        return _poisson_glm(np.column_stack([np.ones(inside.sum()), np.log(dc - D[inside])]),
+                            n[inside], T[inside])
+
+    profile = [(dc,) + power_law_at(dc) for dc in top + np.geomspace(1e-4, dc_span_m, 400)]
     dc, b, ll = max(profile, key=lambda t: t[2])
     # The profile likelihood's 95 % lower bound on D_c: the smallest D_c with
     # 2 (ln L_best - ln L(D_c)) < chi2_{0.95}(1) = 3.84.
     allowed = [t[0] for t in profile if 2 * (ll - t[2]) < stats.chi2.ppf(0.95, 1)]
     out["pow_Dc_lower_95"] = float(min(allowed))
     if dc_fixed_m is not None:
-        if dc_fixed_m <= top:
-            return {"reason": "D_c = %.3g cm is not above the largest outlet with a jam (%.3g cm)"
-                    % (dc_fixed_m * 100, top * 100)}
-        inside = D < dc_fixed_m
-        b, ll_fixed = _poisson_glm(np.column_stack([np.ones(inside.sum()),
-                                                    np.log(dc_fixed_m - D[inside])]),
-                                   n[inside], T[inside])
-        dc, ll = dc_fixed_m, ll_fixed
+        dc = dc_fixed_m
+        b, ll = power_law_at(dc)
         out["pow_Dc_fixed"] = True
     out.update({"pow_Dc": float(dc), "pow_ln_A": float(b[0]), "pow_gamma": float(b[1]),
                 "pow_lnL": ll, "pow_aic": -2 * ll + (4 if dc_fixed_m is not None else 6),
@@ -546,13 +544,13 @@ def question_figure(result, png, dc_cm=5.0):
     if "exp_B" in f:
         D = np.linspace(min(r["D_cm"] for r in pts), max(r["D_cm"] for r in pts) + 0.6, 300)
         fixed = poisson_fits(pts, dc_fixed_m=dc_cm / 100)
-        ax.plot(D, np.exp(f["exp_ln_A"] - f["exp_B"] * D / 100), color="C1",
+        ax.plot(D, [law_rates(f, d / 100)[0] for d in D], color="C1",
                 label="exponential, B = %.2f/cm (AIC 0)" % (f["exp_B"] / 100))
         for g, style, what in ((f, "--", "best power law"), (fixed, ":", "power law")):
             if "pow_Dc" not in g:
                 continue
-            Dm = D[D / 100 < g["pow_Dc"]] / 100
-            ax.plot(Dm * 100, np.exp(g["pow_ln_A"] + g["pow_gamma"] * np.log(g["pow_Dc"] - Dm)),
+            Dm = D[D / 100 < g["pow_Dc"]]
+            ax.plot(Dm, [law_rates(g, d / 100)[1] for d in Dm],
                     style, color="C2" if style == "--" else "C3",
                     label="%s, D_c = %.3g cm (AIC %+.1f)" % (what, g["pow_Dc"] * 100,
                                                              g["pow_aic"] - g["exp_aic"]))
