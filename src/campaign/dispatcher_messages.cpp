@@ -112,6 +112,13 @@ void Dispatcher::on_interrupted(int worker, const Item& item, const Busy& was, c
         const double thrown = std::max(0.0, m.seconds - was.saved_seconds);
         report_.lost_worker_seconds += thrown;
         report_.saved_worker_seconds += m.seconds - thrown;
+        log_ << "campaign: '" << todo_[item.index].label << "' #" << todo_[item.index].realization
+             << " stopped after " << format_duration(m.seconds) << " on worker " << worker << "; "
+             << format_duration(thrown) << " of its worker time is thrown away ("
+             << (ckpt_ ? "its state at the stop was not saved" : "checkpoints are off") << "); "
+             << (was.saved_seconds > 0 ? "it continues from its last checkpoint on resume"
+                                       : "it starts from the beginning on resume")
+             << std::endl;
     }
 }
 

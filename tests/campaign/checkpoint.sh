@@ -29,19 +29,26 @@ run_cmd() {  # run_cmd STORE [options...]: the command line for this NP
         echo mpirun -np "$NP" "$EXE" run "$SWEEP" --store "$store" --progress-interval 0 "$@"
     fi
 }
-# wait_running STORE SECONDS: until a realization has been running for SECONDS (status --json).
+# wait_running STORE SECONDS: until a realization has been running for SECONDS (status --json;
+# its age on the master's clock, from the dispatch). Writes "LABEL' #R" of the longest-running
+# one to running.txt (the form of the run's log lines), for the cases that check its fate.
+# Waits for the condition, not for a time: a loaded machine only makes it take longer (a
+# bound of 120 s against a hang).
 wait_running() {
-    local i
-    for i in $(seq 1 400); do
+    local t_end=$((SECONDS + 120))
+    while [ "$SECONDS" -lt "$t_end" ]; do
         if "$EXE" status "$1" --json 2>/dev/null | "$PY" -c "
 import json, sys
 r = json.load(sys.stdin)['running']
-sys.exit(0 if r and max(t['seconds'] for t in r) >= $2 else 1)" 2>/dev/null; then
+if not r: sys.exit(1)
+t = max(r, key=lambda t: t['seconds'])
+if t['seconds'] < $2: sys.exit(1)
+open('running.txt', 'w').write(\"%s' #%d\" % (t['label'], t['realization']))" 2>/dev/null; then
             return 0
         fi
         sleep 0.05
     done
-    fail "no realization of $1 ran for $2 s"
+    fail "no realization of $1 ran for $2 s within 120 s"
 }
 stop_all() {  # SIGTERM to every campaign process of the job (as Slurm at the limit)
     if [ "$NP" -eq 0 ]; then kill -TERM "$JOB"; else kill -TERM $(pgrep -s "$JOB" -x campaign); fi
@@ -57,6 +64,9 @@ digest "$WORK/ref.h5" ref.digest
 STORE=$WORK/c.h5
 : >job.err
 start_job $(run_cmd "$STORE")
+# (Margin: the SIGTERM must find a realization running, any one: each running one saves its
+# state at its next step. Seen at 0.4 s into the first pair, at least the second pair of
+# about 1 s each is still to come, whatever the load.)
 wait_running "$STORE" 0.4
 stop_all
 [ "$JOB_RC" -eq 4 ] || { cat job.err >&2; fail "SIGTERM: exit $JOB_RC, expected 4"; }
@@ -115,10 +125,13 @@ STORE=$WORK/k.h5
 : >job.err
 start_job $(run_cmd "$STORE" --checkpoint-interval 0.3)
 wait_running "$STORE" 1.0
-sleep 0.2
+# The first periodic state is due 0.3 s into the realization; wait for its file (the condition
+# the kill needs), not a fixed time: on a loaded machine it can come later.
+t_end=$((SECONDS + 120))
+until ls "$STORE.checkpoints"/*.ckpt >/dev/null 2>&1 || [ "$SECONDS" -ge "$t_end" ]; do sleep 0.05; done
 n=$(ls "$STORE.checkpoints"/*.ckpt 2>/dev/null | wc -l)
 kill_job KILL
-[ "$n" -ge 1 ] || fail "no periodic checkpoint after 1 s with --checkpoint-interval 0.3"
+[ "$n" -ge 1 ] || fail "no periodic checkpoint within 120 s with --checkpoint-interval 0.3"
 run_expect 0 krerun $(run_cmd "$STORE")
 expect_in krerun.err "realization(s) continued from a checkpoint"
 digest "$STORE" k.digest
@@ -133,19 +146,32 @@ expect_in phys.err "it was written for other physics of this point"
 [ ! -e "$STORE.checkpoints" ] || fail "refused checkpoints were not removed"
 
 # 5. Without checkpoints the interrupted worker time is thrown away, and /runs says so.
+#    The slow realizations (3.5-5.5 s of one quiet core each, ckpt.toml's about 1 s): the one
+#    seen running for 1 s still has 2.5 s or more of computing ahead, so it is still running at
+#    the SIGTERM sent right after the look, however loaded the machine (load slows both alike).
+#    (With ckpt.toml's, under ctest -j2 the one seen could end in that gap and a fresh one be
+#    stopped instead: 0.04 s lost, issue 45.) The test then checks that very realization was
+#    the one stopped, from the run's own log, before it asserts the loss: its worker time is
+#    counted from its arrival at the worker, at most a scheduling delay after the dispatch the
+#    1 s is counted from, so more than 0.3 s is thrown away.
+SWEEP=slow.toml
 STORE=$WORK/n.h5
 : >job.err
 start_job $(run_cmd "$STORE" --no-checkpoints)
-wait_running "$STORE" 0.4
+wait_running "$STORE" 1.0
 stop_all
 [ "$JOB_RC" -eq 4 ] || { cat job.err >&2; fail "SIGTERM without checkpoints: exit $JOB_RC"; }
 [ ! -e "$STORE.checkpoints" ] || fail "--no-checkpoints wrote checkpoints"
+seen=$(cat running.txt)
+grep -F -- "$seen stopped after" job.err | grep -qF "of its worker time is thrown away (checkpoints are off)" ||
+    { cat job.err >&2; fail "the realization seen running for 1 s ($seen) was not the one stopped"; }
 run_expect 0 st5 "$EXE" status "$STORE" --json
 "$PY" -c "
 import json, sys
 r = json.load(open('st5.out'))['runs'][-1]
 assert r['lost_worker_seconds'] > 0.3 and r['saved_worker_seconds'] == 0, r" ||
     fail "lost worker seconds without checkpoints"
+SWEEP=$FAST_SWEEP
 
 # 6. Deadlines. Nothing measured yet: realizations start and are stopped (states saved) at the
 #    deadline minus the grace; the rest of the campaign then ends identical. Measured (the
@@ -163,8 +189,9 @@ t0=$(date +%s.%N)
 # be running at the stop; these take 3.5-5.5 s each on a quiet core)
 run_expect 4 dl $(run_cmd "$STORE" --deadline +4 --grace 1)
 took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
-# (mpirun's start and end add a second or two on a loaded machine: a bound against hanging)
-awk -v t="$took" 'BEGIN { exit !(t < 10) }' || fail "the deadline run took $took s (deadline 4 s)"
+# (A bound against hanging, not a speed test: mpirun's start and end add seconds on a loaded
+# or one-core machine, and a hang would last until ctest's timeout.)
+awk -v t="$took" 'BEGIN { exit !(t < 30) }' || fail "the deadline run took $took s (deadline 4 s)"
 expect_in dl.err "nothing of this campaign is measured yet"
 expect_in dl.err "stopped by the deadline"
 run_expect 0 dst "$EXE" status "$STORE" --json
