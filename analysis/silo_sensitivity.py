@@ -1,0 +1,141 @@
+#!/usr/bin/python3
+"""The flat silo's sensitivity map (issue 39, docs/validation.md "Sensitivity"): each lever's
+effect on ln(<s>+1) per outlet and on the slope b.
+
+usage: silo_sensitivity.py STORE.h5 [STORE.h5 ...] [--baseline JSON_OR_STORE] [--json F] [--md F]
+
+Every point of the stores is one lever setting at one outlet: its lever is the point's label
+less the outlet and the angle (`material.mu_r=0.1`; a point with nothing else is "baseline").
+Per point, as silo_validation.py (whose estimator this reuses): the steady avalanches (each
+realization's first, from the settled fill, left out), <s> = grains / clogs with its standard
+error <s>/sqrt(clogs), y = ln(<s>+1) with sigma_y = se / (<s>+1), worker core-hours. Against the
+baseline at the same outlet (the arch-removal campaign of docs/validation.md: by default
+docs/figures/silo_validation.json's rows; or another store, or the points labelled baseline):
+the difference dy and its z = dy / sqrt(sigma^2 + sigma_base^2). A lever with 3 or more outlets
+of 5+ clogs gets its own fit of ln(<s>+1) = a + b (D/d)^2 (silo_validation.fit).
+"""
+import argparse
+import json
+import math
+import os
+import re
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from hopper_store import open_store  # noqa: E402
+from silo_validation import fit, summarize_store  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_BASELINE = os.path.join(HERE, "..", "docs", "figures", "silo_validation.json")
+
+
+def lever_of(label):
+    """The label less its outlet and angle: 'D_cm=2.695 theta_deg=0 material.mu=0.2' ->
+    'material.mu=0.2'; nothing left -> 'baseline'."""
+    rest = [t for t in label.split() if not re.match(r"^(D_cm|theta_deg)=", t)]
+    return " ".join(rest) or "baseline"
+
+
+def with_log(row):
+    s, se = row["mean_s"], row["se"]
+    row["y"] = math.log(s + 1) if s is not None and math.isfinite(s) else None
+    row["y_err"] = se / (s + 1) if row["y"] is not None and se is not None else None
+    return row
+
+
+def rows_of(path):
+    with open_store(path) as s:
+        rows = summarize_store(s, path, skip_first=True)
+        r = s.realizations
+        hours = {}
+        for i, pt in s.points.iterrows():
+            hours[pt["label"]] = float(r[r["point"] == i]["task_seconds"].sum()) / 3600
+    for row in rows:
+        row["lever"] = lever_of(row["label"])
+        row["core_hours"] = hours.get(row["label"], 0.0)
+        row.pop("first_by_seed", None)
+        with_log(row)
+    return rows
+
+
+def baseline_rows(spec, rows):
+    if spec and spec.endswith(".h5"):
+        return [r for r in rows_of(spec) if r["lever"] == "baseline"]
+    own = [r for r in rows if r["lever"] == "baseline"]
+    if own and not spec:
+        return own
+    with open(spec or DEFAULT_BASELINE) as fh:
+        return [with_log(dict(r)) for r in json.load(fh)["remove_arch"]]
+
+
+def compare(rows, base):
+    """Adds dy and z against the baseline row of the same outlet (D/d to 1e-3)."""
+    for row in rows:
+        b = next((x for x in base if abs(x["D_over_d"] - row["D_over_d"]) < 1e-3), None)
+        row["base_y"] = b["y"] if b else None
+        if b and row["y"] is not None and row["clogs"] > 0 and b["y"] is not None:
+            row["dy"] = row["y"] - b["y"]
+            row["z"] = row["dy"] / math.hypot(row["y_err"], b["y_err"])
+        else:
+            row["dy"] = row["z"] = None
+    return rows
+
+
+def lever_fits(rows):
+    out = {}
+    for lever in sorted({r["lever"] for r in rows}):
+        f = fit([r for r in rows if r["lever"] == lever])
+        if f:
+            f.pop("critical", None)
+            out[lever] = f
+    return out
+
+
+def fmt(v, spec="%.2f"):
+    return "-" if v is None else spec % v
+
+
+def markdown(rows, fits):
+    lines = ["| lever | D/d | realizations | clogs | <s> +- se | ln(<s>+1) +- se | baseline | "
+             "difference | z | core-hours |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in sorted(rows, key=lambda r: (r["D_over_d"], r["lever"])):
+        ms = "-" if not r["clogs"] else "%.4g +- %.2g" % (r["mean_s"], r["se"])
+        lines.append("| %s | %.2f | %d | %d | %s | %s | %s | %s | %s | %.2f |" % (
+            r["lever"], r["D_over_d"], r["realizations"], r["clogs"], ms,
+            "-" if r["y"] is None or not r["clogs"] else "%.2f +- %.2f" % (r["y"], r["y_err"]),
+            fmt(r["base_y"]), fmt(r["dy"], "%+.2f"), fmt(r["z"], "%+.1f"), r["core_hours"]))
+    if fits:
+        lines += ["", "| lever | outlets | b +- se | a +- se |", "|---|---|---|---|"]
+        for lever, f in fits.items():
+            lines.append("| %s | %s | %.3f +- %.3f | %.2f +- %.2f |" % (
+                lever, ", ".join("%.1f" % x for x in f["outlets"]), f["b"], f["b_err"], f["a"],
+                f["a_err"]))
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("stores", nargs="+")
+    ap.add_argument("--baseline", help="a JSON of silo_validation.py or an arch-removal store "
+                    "(default: the stores' own baseline points, else %s)" % DEFAULT_BASELINE)
+    ap.add_argument("--json")
+    ap.add_argument("--md")
+    a = ap.parse_args()
+    for p in a.stores:
+        if not os.path.exists(p):
+            sys.exit("silo_sensitivity.py: no store %s" % p)
+    rows = [r for p in a.stores for r in rows_of(p)]
+    rows = compare(rows, baseline_rows(a.baseline, rows))
+    fits = lever_fits(rows)
+    md = markdown(rows, fits)
+    sys.stdout.write(md)
+    if a.md:
+        with open(a.md, "w") as fh:
+            fh.write(md)
+    if a.json:
+        with open(a.json, "w") as fh:
+            json.dump({"rows": rows, "fits": fits}, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()
