@@ -20,8 +20,12 @@ PY
 
 STORE=$WORK/s.h5
 start_job mpirun -np 3 "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --threads 2
-wait_stored "$STORE" 2
-kill -TERM $(pgrep -s "$JOB" -x campaign)
+# SIGTERM with the job frozen (lib.sh) once 2 are stored and 2 or more not handed out: the 4
+# workers cannot finish the 12 before it, however fast the machine or slow the test's polls.
+freeze_when "$STORE" "s['done'] >= 2 and s['pending'] - len(s['running']) >= 2" \
+    "2 realizations stored, 2 not handed out"
+kill -TERM $FROZEN
+thaw_job
 wait "$JOB"
 rc=$?
 [ $rc -eq 4 ] || { cat job.err >&2; fail "SIGTERM: exit $rc, expected 4"; }

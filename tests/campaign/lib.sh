@@ -12,6 +12,7 @@ rm -rf "$WORK" && mkdir -p "$WORK" && cd "$WORK" || exit 1
 
 fail() {
     echo "FAIL: $*" >&2
+    thaw_job  # a job frozen for a look (freeze_when) must not be left stopped
     exit 1
 }
 
@@ -71,15 +72,88 @@ random_sleep() {
     sleep "$(printf '%d.%03d' $((ms / 1000)) $((ms % 1000)))"
 }
 
-# wait_stored STORE N: waits (up to 30 s) until the store holds at least N realizations.
-wait_stored() {
-    local i
-    for i in $(seq 1 600); do
-        if [ -e "$1.journal" ] && "$EXE" status "$1" --json 2>/dev/null |
-            "$PY" -c "import json,sys; sys.exit(0 if json.load(sys.stdin)['done'] >= $2 else 1)"; then
-            return 0
-        fi
+# Waiting: tests wait for what their next assertion needs (a realization stored or running, a
+# line in the run's log, a file), never for a fixed time. Each wait has a generous bound against a
+# hang (120 s: a loaded machine only makes a condition take longer to come, and none of these
+# takes more than a few seconds on a quiet one) and fails saying what never came.
+WAIT_BOUND=120
+
+# wait_until WHAT CMD...: runs CMD every 0.05 s until it succeeds; fails naming WHAT after
+# WAIT_BOUND seconds.
+wait_until() {
+    local what=$1 t_end=$((SECONDS + WAIT_BOUND))
+    shift
+    until "$@"; do
+        [ "$SECONDS" -lt "$t_end" ] || fail "$what: not within $WAIT_BOUND s"
         sleep 0.05
     done
-    fail "the store never held $2 realizations"
+}
+
+# status_has STORE COND: the store's status --json, as s, satisfies the Python expression COND.
+status_has() {
+    [ -e "$1.journal" ] && "$EXE" status "$1" --json 2>/dev/null |
+        "$PY" -c "import json, sys; s = json.load(sys.stdin); sys.exit(0 if ($2) else 1)" 2>/dev/null
+}
+
+# wait_stored STORE N: waits until the store holds at least N realizations.
+wait_stored() {
+    wait_until "the store $1 holding $2 realizations" status_has "$1" "s['done'] >= $2"
+}
+
+# Freezing the job for a look. A condition read from status --json while the run goes on can be
+# stale by the time the test acts on it (a realization seen running ends, the last one is handed
+# out): on a fast machine, or one where the test's polls are slow, the signal that follows then
+# meets another state than the one seen. freeze_when stops every campaign process of the job
+# (SIGSTOP) and reads the status again: what it reads then holds until thaw_job, and a signal
+# sent meanwhile is pending when the processes continue, before they run another step.
+FROZEN=""
+freeze_job() {  # SIGSTOP to every campaign process of the job (every rank under mpirun)
+    FROZEN=$(pgrep -s "$JOB" -x campaign | tr '\n' ' ')
+    [ -n "$FROZEN" ] || return 0
+    kill -STOP $FROZEN 2>/dev/null
+    wait_until "the job's processes stopping on SIGSTOP" all_stopped  # kill returns before
+}
+all_stopped() {  # every thread of the processes in FROZEN is stopped (or gone)
+    local p f line st
+    for p in $FROZEN; do
+        for f in /proc/"$p"/task/*/stat; do
+            line=$(cat "$f" 2>/dev/null) || continue
+            st=${line##*) }
+            case ${st%% *} in T | t | Z | X | "") ;; *) return 1 ;; esac
+        done
+    done
+}
+job_alive() {  # the job's process runs (a zombie, ended but not yet waited for, does not)
+    local st
+    st=$(ps -o stat= -p "$JOB" 2>/dev/null)
+    [ -n "$st" ] && [ "${st#Z}" = "$st" ]
+}
+thaw_job() {  # SIGCONT to what freeze_job stopped
+    [ -n "${FROZEN:-}" ] && kill -CONT $FROZEN 2>/dev/null
+    FROZEN=""
+}
+# freeze_when STORE COND WHAT: waits until the status satisfies COND (see status_has) while the
+# job runs, then freezes it and looks again; returns with the job frozen once the frozen look
+# satisfies COND too. Fails naming WHAT if the job ends first or after WAIT_BOUND seconds.
+freeze_when() {
+    local t_end=$((SECONDS + WAIT_BOUND))
+    while :; do
+        if status_has "$1" "$2"; then
+            freeze_job
+            status_has "$1" "$2" && return 0
+            thaw_job
+        fi
+        job_alive || fail "$3: the run ended first"
+        [ "$SECONDS" -lt "$t_end" ] || fail "$3: not within $WAIT_BOUND s"
+        sleep 0.05
+    done
+}
+# pending_signal PID SIG: PID has SIG (a number) pending (stopped processes keep it so).
+pending_signal() {
+    local mask
+    mask=$(awk '$1 == "ShdPnd:" || $1 == "SigPnd:" { print $2 }' "/proc/$1/status" 2>/dev/null | tr '\n' ' ')
+    for m in $mask; do
+        (( (16#$m >> ($2 - 1)) & 1 )) && return 0
+    done
+    return 1
 }

@@ -5,18 +5,17 @@
 # running; after the run the rate is positive, nothing is pending and nothing is running.
 # `campaign simulate --progress` prints the wall-clock rate and, once particles leave, an ETA.
 source "$(dirname "$0")/lib.sh"
-"$EXE" run "$DATA/mini_fields.toml" --store "$WORK/p.h5" --progress-interval 0 >run.out 2>run.err &
-pid=$!
-seen=0
-for _ in $(seq 1 200); do
-    if "$EXE" status "$WORK/p.h5" >st.out 2>/dev/null && grep -q "is writing the store" st.out &&
-        grep -q " pending" st.out && ! grep -q "0 pending" st.out && grep -q "^running " st.out; then
-        "$EXE" status "$WORK/p.h5" --json >st.json 2>/dev/null && seen=1 && break
-    fi
-    sleep 0.02
-done
-wait $pid || fail "the run failed: $(cat run.err)"
-[ $seen -eq 1 ] || fail "never saw the run in progress"
+# The run is frozen (lib.sh) once status --json sees it in progress (active, a realization
+# running, more pending); both status forms are then read from that one state.
+start_job "$EXE" run "$DATA/mini_fields.toml" --store "$WORK/p.h5" --progress-interval 0
+freeze_when "$WORK/p.h5" "s['active'] and s['pending'] > 0 and len(s['running']) == 1" \
+    "status seeing the run in progress"
+"$EXE" status "$WORK/p.h5" >st.out 2>st.err || { thaw_job; cat st.err; fail "status while running"; }
+"$EXE" status "$WORK/p.h5" --json >st.json 2>/dev/null || { thaw_job; fail "status --json while running"; }
+thaw_job
+wait "$JOB" || fail "the run failed: $(cat job.err)"
+grep -q "is writing the store" st.out && grep -Eq "^progress .*, [1-9][0-9]* pending" st.out &&
+    grep -q "^running " st.out || { cat st.out; fail "status does not show the run in progress"; }
 grep -Eq "^rate .* realizations per hour \(last run\); ETA [0-9]" st.out || { cat st.out; fail "no ETA while running"; }
 grep -Eq "^workers   rank 1 busy [0-9]" st.out || { cat st.out; fail "no busy worker"; }
 grep -Eq "^running   worker 1: 'D_cm=[0-9.]+ theta_deg=[0-9]+ material.mu=0.5' #[0-9] for [0-9]+s" st.out ||

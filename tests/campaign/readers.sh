@@ -14,11 +14,11 @@ csv_rows() {
 }
 
 start_job "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --threads 1
-trap 'kill -CONT "$JOB" 2>/dev/null' EXIT  # a failed check must not leave the writer frozen
-wait_stored "$STORE" 3
+trap thaw_job EXIT  # a failed check must not leave the writer frozen
 # Freeze the writer mid-run (its journal locked, its HDF5 file open for writing): what is
-# stored at the moment of reading is then fixed.
-kill -STOP "$JOB"
+# stored at the moment of reading is then fixed. Frozen once 3 are stored and some are still to
+# run (read with it frozen, lib.sh): it holds the store during the reads however fast it runs.
+freeze_when "$STORE" "s['done'] >= 3 and s['pending'] > 0" "3 realizations stored, more to run"
 stored=$(done_now)
 "$EXE" status "$STORE" --json | "$PY" -c 'import json,sys; sys.exit(0 if json.load(sys.stdin)["active"] else 1)' ||
     fail "the writer is not holding the store"
@@ -71,7 +71,7 @@ fi
 
 # The writer goes on; readers poll while it runs, each seeing between what was stored before
 # and after it read.
-kill -CONT "$JOB"
+thaw_job
 polls=0
 while kill -0 "$JOB" 2>/dev/null && [ $polls -lt 50 ]; do
     before=$(done_now)

@@ -24,20 +24,16 @@ comm -23 ref.digest ext.digest >missing.txt
 
 # Status while a run writes; a second writer is refused.
 rm -f "$WORK/live.h5"*
+# The writer is frozen (lib.sh) once status sees it active with realizations still to run: it
+# then holds the store for the status and the second run, however fast it is.
 start_job "$EXE" run "$MINI" --store "$WORK/live.h5" --progress-interval 0
-seen_active=0
-for i in $(seq 1 40); do
-    sleep 0.05
-    [ -e "$WORK/live.h5.journal" ] || continue
-    "$EXE" status "$WORK/live.h5" --json >live.json || fail "status failed while running"
-    if "$PY" -c 'import json,sys; s=json.load(open("live.json")); sys.exit(0 if s["active"] else 1)'; then
-        seen_active=1
-        run_expect 1 second "$EXE" run "$MINI" --store "$WORK/live.h5"
-        expect_in second.err "is in use by another \`campaign run\`"
-        break
-    fi
-done
-[ $seen_active -eq 1 ] || fail "status never saw the run active"
+freeze_when "$WORK/live.h5" "s['active'] and s['pending'] > 0" "status seeing the run active"
+run_expect 0 live "$EXE" status "$WORK/live.h5" --json
+"$PY" -c 'import json,sys; s=json.load(open("live.out")); sys.exit(0 if s["active"] else 1)' ||
+    fail "status does not see the run active"
+run_expect 1 second "$EXE" run "$MINI" --store "$WORK/live.h5"
+expect_in second.err "is in use by another \`campaign run\`"
+thaw_job
 wait "$JOB" || { cat job.err >&2; fail "the run failed while status read it"; }
 digest "$WORK/live.h5" live.digest
 same_digests ref.digest live.digest

@@ -14,14 +14,17 @@ else
     CMD=(mpirun -np "$NP" "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30)
 fi
 
+# Each signal is sent with the job frozen (freeze_when, lib.sh) in the state the assertions need:
+# something stored, and at least 2 realizations not yet handed out (more than the one dispatch a
+# worker's result could still get before the master sees the signal), so that the run cannot
+# end complete before the signal, however fast the machine or slow the test's polls.
+NOT_HANDED_OUT="s['pending'] - len(s['running']) >= 2"
+
 # 1. SIGTERM: stop now, once the run is under way.
 start_job "${CMD[@]}"
-wait_stored "$STORE" 1
-if [ "$NP" -eq 0 ]; then
-    kill -TERM "$JOB"
-else
-    kill -TERM $(pgrep -s "$JOB" -x campaign)  # every rank, as Slurm does at the time limit
-fi
+freeze_when "$STORE" "s['done'] >= 1 and $NOT_HANDED_OUT" "a realization stored, 2 not handed out"
+kill -TERM $FROZEN  # every rank, as Slurm does at the time limit
+thaw_job
 wait "$JOB"
 rc=$?
 [ $rc -eq 4 ] || { cat job.err >&2; fail "SIGTERM: exit $rc, expected 4"; }
@@ -47,8 +50,12 @@ PY
 : >job.err
 start_job "${CMD[@]}"
 before=$("$EXE" status "$STORE" --json | "$PY" -c 'import json,sys; print(json.load(sys.stdin)["done"])')
-wait_stored "$STORE" $((before + 1))
+freeze_when "$STORE" "s['done'] >= $((before + 1)) and $NOT_HANDED_OUT" \
+    "one more realization stored, 2 not handed out"
 if [ "$NP" -eq 0 ]; then kill -USR1 "$JOB"; else kill -USR1 $(pgrep -s "$JOB" -x mpirun); fi
+# mpirun forwards the signal to the (frozen) ranks: they continue once every one has it pending.
+for p in $FROZEN; do wait_until "SIGUSR1 forwarded to rank process $p" pending_signal "$p" 10; done
+thaw_job
 wait "$JOB"
 rc=$?
 [ $rc -eq 4 ] || { cat job.err >&2; fail "SIGUSR1: exit $rc, expected 4"; }
@@ -64,7 +71,8 @@ same_digests "$WORK/ref.digest" sig.digest
 # (Slurm's warning signal at the very end of an allocation), stops nothing: the run is complete
 # (exit 0, end_reason "complete"), not "interrupted" with nothing to resume. One realization of
 # a few seconds (ckpt.toml's first point at delta 200, 4x its steps: about 4 s here), the signal
-# once it runs, a grace far longer than it.
+# once it runs (sent with the job frozen while status lists it running: it cannot have ended, nor
+# not yet been handed out, when the signal comes), a grace far longer than it.
 if [ "$NP" -eq 0 ]; then
     sed -e 's/^realizations = .*/realizations = 1/' -e 's/^D_cm = .*/D_cm = [2.0]/' \
         -e 's/^steps_per_collision = .*/steps_per_collision = 200/' \
@@ -72,12 +80,9 @@ if [ "$NP" -eq 0 ]; then
     : >job.err
     start_job "$EXE" run "$WORK/last.toml" --store "$WORK/last.h5" --progress-interval 0 \
         --grace 300 --threads 1
-    for _ in $(seq 100); do
-        [ -e "$WORK/last.h5.journal" ] && grep -qF "0 stored, 1 to run" job.err && break
-        sleep 0.05
-    done
-    sleep 0.5
+    freeze_when "$WORK/last.h5" "len(s['running']) == 1" "the last realization running"
     kill -USR1 "$JOB"
+    thaw_job
     wait "$JOB"
     rc=$?
     expect_in job.err "SIGUSR1: handing out no more tasks"
