@@ -63,7 +63,7 @@ digest small.h5 small.digest
 
 # 3. The large one, stopped by SIGTERM once it holds 12 realizations (three rounds).
 start_job "$EXE" run big.toml --store big.h5 --progress-interval 0
-wait_stored big.h5 12
+wait_stored big.h5 12  # no race: a target it never meets, the run would go on for ever
 hwm=$(awk '/^VmHWM/ {print $2}' "/proc/$JOB/status")
 kill_job TERM
 [ "$JOB_RC" -eq 4 ] || { cat job.err >&2; fail "the stopped run exited $JOB_RC, expected 4"; }

@@ -15,18 +15,25 @@ expect_in ref.out "figures: campaign plot $WORK/ref.h5 --out $WORK/ref_plots"
 run_expect 0 json "$EXE" analyze "$WORK/ref.h5" --json
 "$PY" "$SRC/tests/campaign/check_analysis.py" json.out "$WORK/ref.h5" || fail "check_analysis.py"
 
-# Re-analysis replaces the group: same members, same row counts.
-"$PY" -c "import h5py,sys; f=h5py.File(sys.argv[1],'r'); print(f['analysis'].attrs['created'])" \
-    "$WORK/ref.h5" >created1.txt || fail "h5py"
+# Re-analysis replaces the group: same members, same row counts, a later creation time.
+created() {  # the /analysis group's creation time (UTC, whole seconds, ISO 8601)
+    "$PY" -c "
+import h5py, sys
+c = h5py.File(sys.argv[1], 'r')['analysis'].attrs['created']
+print(c.decode() if isinstance(c, bytes) else c)" "$WORK/ref.h5"
+}
+created >created1.txt || fail "h5py"
 h5ls -r "$WORK/ref.h5" | grep '^/analysis' >members1.txt || fail "h5ls"
-sleep 1
+# The time stamp has whole seconds: wait until the clock has left the first one's second.
+wait_until "the UTC clock passing $(cat created1.txt)" eval '[[ "$(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$(cat created1.txt)" ]]'
 run_expect 0 again "$EXE" analyze "$WORK/ref.h5"
 expect_in again.out "analysis written to"
 h5ls -r "$WORK/ref.h5" | grep '^/analysis' >members2.txt || fail "h5ls"
 cmp -s members1.txt members2.txt || { diff members1.txt members2.txt >&2; fail "members differ"; }
 grep -q '^/analysis/points/label *Dataset {3/Inf}' members2.txt || fail "/analysis/points rows"
-"$PY" -c "import h5py,sys; f=h5py.File(sys.argv[1],'r'); print(f['analysis'].attrs['created'])" \
-    "$WORK/ref.h5" >created2.txt || fail "h5py"
+created >created2.txt || fail "h5py"
+[[ "$(cat created2.txt)" > "$(cat created1.txt)" ]] ||
+    fail "re-analysis did not replace /analysis: created $(cat created1.txt), then $(cat created2.txt)"
 "$PY" "$SRC/tests/campaign/check_store.py" "$WORK/ref.h5" "$EXE" "$MINI" || fail "check_store.py"
 digest "$WORK/ref.h5" "$WORK/after.digest"
 same_digests "$WORK/ref.digest" "$WORK/after.digest"

@@ -31,22 +31,26 @@ for how in continued lost; do
     : >job.err
     start_job mpirun -np 3 "$EXE" run "$SWEEP" --store "$STORE" --progress-interval 0 \
         --worker-timeout 1
+    # Stopped with 34 of the 36 realizations still to store (the master cannot finish them in
+    # the moment between the look and the stop). The other worker sends heartbeats every 0.25 s
+    # against the limit of 1 s: only a process stopped for 4 heartbeats in a row is silent.
     wait_stored "$STORE" 2
     W=$(rank_pid 1)
     [ -n "$W" ] || fail "no rank 1 in the job"
     kill -STOP "$W"
     if [ $how = continued ]; then
-        for i in $(seq 1 100); do grep -q "has been silent" job.err && break; sleep 0.1; done
-        sleep 0.5
+        # Continued once the master has handed its realization to the other worker (the end of
+        # the line that reports the silence), so that the late result meets a reassigned one.
+        wait_until "the master reporting worker 1 silent and reassigning its realization" \
+            grep -q "has been silent for .* handing it to another worker" job.err
         kill -CONT "$W"
     fi
-    # The job must end by itself (within the test's time limit).
-    for i in $(seq 1 600); do kill -0 "$JOB" 2>/dev/null || break; sleep 0.1; done
-    if kill -0 "$JOB" 2>/dev/null; then
+    # The job must end by itself: a hang, not a slow machine, is what outlasts WAIT_BOUND.
+    if ! (wait_until "the job ending" eval '! job_alive') 2>/dev/null; then
         kill -CONT "$W" 2>/dev/null
         kill_job KILL
         cat job.err >&2
-        fail "$how: the job did not end within 60 s"
+        fail "$how: the job did not end within $WAIT_BOUND s"
     fi
     wait "$JOB"
     rc=$?
