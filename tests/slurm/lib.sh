@@ -40,11 +40,15 @@ cleanup() {
     exit "$rc"
 }
 
+# Waits are for conditions (a log line, realizations stored, a chain's end), each with a bound
+# against a hang that a loaded machine does not reach; the bounds are seconds of the clock
+# (SECONDS), not counts of polls whose length varies with the load.
+
 # wait_chain LOG SECONDS [N]: waits until N (default 1) job chains logging to LOG have ended (a
 # line saying the campaign is complete or that it does not resubmit) and no job of JOB_NAME is left.
 wait_chain() {
-    local i n
-    for i in $(seq 1 $((10 * $2))); do
+    local n t_end=$((SECONDS + $2))
+    while [ "$SECONDS" -lt "$t_end" ]; do
         n=$(grep -cE "campaign complete|not resubmitting|resubmission failed" "$1" 2>/dev/null)
         if [ "${n:-0}" -ge "${3:-1}" ] &&
             [ -z "$(squeue -h -n "$JOB_NAME" 2>/dev/null)" ]; then
@@ -55,15 +59,25 @@ wait_chain() {
     fail "the job chain did not end within $2 s"
 }
 
-# wait_stored STORE N: waits (60 s) until the store holds at least N realizations.
+# wait_stored STORE N: waits (120 s; a few seconds on a quiet machine) until the store holds at
+# least N realizations.
 wait_stored() {
-    local i n
-    for i in $(seq 1 600); do
+    local n t_end=$((SECONDS + 120))
+    while [ "$SECONDS" -lt "$t_end" ]; do
         n=$("$EXE" status "$1" --json 2>/dev/null | sed -n 's/^  "done": \([0-9]*\).*/\1/p')
         [ -n "$n" ] && [ "$n" -ge "$2" ] && return 0
         sleep 0.1
     done
-    fail "the store never held $2 realizations"
+    fail "the store never held $2 realizations (120 s)"
+}
+
+# wait_log LOG PATTERN WHAT: waits (120 s) until LOG has a line matching the regular expression.
+wait_log() {
+    local t_end=$((SECONDS + 120))
+    until grep -qE "$2" "$1" 2>/dev/null; do
+        [ "$SECONDS" -lt "$t_end" ] || fail "$3: not within 120 s"
+        sleep 0.02
+    done
 }
 
 # submit_tiny OUT ARGS...: `campaign submit` of tiny.toml into $STORE as $JOB_NAME with ARGS, its

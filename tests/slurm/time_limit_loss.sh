@@ -11,6 +11,10 @@
 # away and kept (/runs) and the worker time of the realizations it stored (/realizations);
 # "after" must throw nothing away, "before" must have lost some (else the comparison says
 # nothing and the test fails: the limit did not cut a realization).
+# Slurm's clock is the subject here, so it has margins, not conditions: a chain takes about 3
+# allocations of a minute (wait_chain's 900 s is a hang's bound, 15 of them); "before" loses
+# worker time when a realization runs as its allocation's grace ends: 2 workers busy with 10 s
+# realizations (60 s of wall time) against allocations that run about 30 s always have one.
 source "$(dirname "$0")/lib.sh"
 JOB_NAME=hopper-test-loss
 LONG=$SRC/tests/slurm/data/long.toml
