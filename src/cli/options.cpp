@@ -30,6 +30,19 @@ std::uint64_t parse_seed(std::string_view option, std::string_view text) {
     return v;
 }
 
+std::uint64_t parse_seed_text(std::string_view option, std::string_view text) {
+    std::string_view digits = text;
+    if (digits.size() > 1 && digits.front() == 's' && digits[1] >= '0' && digits[1] <= '9')
+        digits.remove_prefix(1);
+    try {
+        return parse_seed(option, digits);
+    } catch (const core::ConfigError& e) {
+        if (std::string_view(e.what()).find("at most") != std::string_view::npos)
+            reject(option, "a non-negative integer of at most 18446744073709551615", text);
+        reject(option, "a non-negative integer (or a seed_str: 's' and its digits)", text);
+    }
+}
+
 double parse_finite(std::string_view option, std::string_view text) {
     constexpr std::string_view what = "a finite number";
     std::string_view digits = text;

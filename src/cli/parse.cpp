@@ -1,5 +1,6 @@
 #include "cli/parse.hpp"
 
+#include "config/key_table.hpp"  // detail::suggestion, the sweep keys' "did you mean"
 #include "hopper/core/error.hpp"
 
 namespace po = boost::program_options;
@@ -12,13 +13,23 @@ po::variables_map parse_command(const std::vector<std::string>& args,
     po::positional_options_description positional;
     positional.add(positional_name, -1);
     po::variables_map vm;
-    po::store(
-        po::command_line_parser(args)
-            .options(options)
-            .positional(positional)
-            .style(po::command_line_style::default_style & ~po::command_line_style::allow_guessing)
-            .run(),
-        vm);
+    try {
+        po::store(po::command_line_parser(args)
+                      .options(options)
+                      .positional(positional)
+                      .style(po::command_line_style::default_style &
+                             ~po::command_line_style::allow_guessing)
+                      .run(),
+                  vm);
+    } catch (const po::unknown_option& e) {
+        // "--thread": the closest option, as a misspelt sweep key gets (issue 43, item 10).
+        std::vector<std::string> names;
+        for (const auto& o : options.options())
+            if (!o->long_name().empty() && o->long_name() != positional_name)
+                names.push_back("--" + o->long_name());
+        throw po::error(std::string(e.what()) +
+                        config::detail::suggestion(e.get_option_name(), names));
+    }
     po::notify(vm);
     return vm;
 }

@@ -25,7 +25,7 @@ po::options_description simulate_options() {
         ("theta", po::value<std::string>()->value_name("DEG"),
          "wall angle to the horizontal in degrees")  //
         ("seed", po::value<std::string>()->value_name("N"),
-         "random seed, a non-negative integer")  //
+         "random seed: a non-negative integer, or a store's seed_str (s and its digits)")  //
         ("store", po::value<std::string>()->value_name("STORE.h5"),
          "with --point: the store holding the realization")  //
         ("point", po::value<std::string>()->value_name("LABEL"),
@@ -99,7 +99,7 @@ int simulate_command(const std::vector<std::string>& args) {
         opt.sweep = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
         opt.D_cm = parse_finite("--D", required(vm, "D"));
         opt.theta_deg = parse_finite("--theta", required(vm, "theta"));
-        opt.seed = parse_seed("--seed", required(vm, "seed"));
+        opt.seed = parse_seed_text("--seed", required(vm, "seed"));
     }
     opt.json = vm["json"].as<bool>();
     opt.progress = vm["progress"].as<bool>();

@@ -119,6 +119,8 @@ void print_status_help(std::ostream& os) {
     os << "usage: campaign status STORE.h5 [--json]\n\n"
           "Progress and failures of a campaign store, from its journal (STORE.h5.journal).\n"
           "Safe while `campaign run` is writing the store: it never locks or blocks it.\n\n"
+          "exit codes: 0 shown, 1 no store or not a hopper store (unreadable journal),\n"
+          "            2 bad command line\n\n"
        << status_options();
 }
 

@@ -275,6 +275,8 @@ void print_submit_help(std::ostream& os) {
           "itself while the store has pending realizations, at most K times. The run starts no\n"
           "realization that cannot end before the warning signal is due (--deadline).\n"
           "Submitting again resumes.\n\n"
+          "exit codes: 0 submitted (or, with --dry-run, the script and estimate printed),\n"
+          "            2 bad command line or sweep file, 1 sbatch failed or another error\n\n"
        << submit_options();
 }
 

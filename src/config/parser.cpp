@@ -265,9 +265,15 @@ SceneParams Parser::build_scene(const std::vector<Given>& overrides,
     if (s.d_large < s.d_small)
         fail(where + "hopper.d_large_cm = " + in_cm(s.d_large) +
              " must be at least hopper.d_small_cm = " + in_cm(s.d_small));
-    if (!(h.width > 2.0 * s.d_large))
-        fail(where + "hopper.width_cm = " + in_cm(h.width) +
-             " must exceed 2 * hopper.d_large_cm = " + in_cm(2.0 * s.d_large));
+    if (!(h.width > 2.0 * s.d_large)) {
+        std::string msg = where + "hopper.width_cm = " + in_cm(h.width) +
+                          " must exceed 2 * hopper.d_large_cm = " + in_cm(2.0 * s.d_large);
+        // A width in metres (width_cm = 0.12 for 12 cm) gets the value in centimetres.
+        if (h.width * 100 > 2.0 * s.d_large)
+            msg += "; width_cm is in centimetres: for " + in_cm(h.width * 100) +
+                   " cm write width_cm = " + in_cm(h.width * 100);
+        fail(msg);
+    }
     if (!(h.outlet < h.width))
         fail(where + "D_cm = " + in_cm(h.outlet) + " must be smaller than hopper.width_cm = " +
              in_cm(h.width) + " (the outlet must fit inside the hopper)");

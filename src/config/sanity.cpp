@@ -70,6 +70,16 @@ std::string scene_problem(const engine::SceneParams& p) {
             msg += ": for " + cm(as_metres) + " cm write D_cm = " + cm(as_metres);
         return msg;
     }
+    // A wall angle given in radians: 0 < theta_deg < 1.6 (90 degrees read as radians is
+    // pi / 2 = 1.5708). Walls that close to horizontal are a flat bottom, theta_deg = 0.
+    const double theta_deg = h.theta / core::deg;
+    if (theta_deg > 0 && theta_deg < 1.6) {
+        const std::string value = detail::approx_number(theta_deg);
+        const double as_radians = std::round(theta_deg * 180 / std::numbers::pi * 10) / 10;
+        return "theta_deg = " + value + " is the wall angle in degrees (walls " + value +
+               " degrees from horizontal; a flat bottom is theta_deg = 0): for " + value +
+               " radians write theta_deg = " + detail::approx_number(as_radians);
+    }
     const double height = settled_fill_height(p);
     if (height > max_fill_widths * h.width)
         return "hopper.particles = " + std::to_string(s.count) + " would stand about " +

@@ -10,6 +10,7 @@
 
 #include "config/key_table.hpp"
 #include "config/parser.hpp"
+#include "hopper/config/sanity.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/core/random.hpp"
@@ -70,6 +71,9 @@ engine::SceneParams scene_at(const SweepFile& sweep, double D_cm, double theta_d
     } catch (const ConfigError& e) {
         throw ConfigError(file + ": " + e.what());
     }
+    // The orders of magnitude the sweep file's points get (a value in metres or radians).
+    if (const std::string problem = scene_problem(p); !problem.empty())
+        throw ConfigError(file + ": " + problem);
     return p;
 }
 

@@ -86,7 +86,8 @@ std::string without_wall_clock(const std::string& json) {
 
 TEST(CampaignCli, SameSeedGivesIdenticalJsonApartFromWallClock) {
     const Outcome a = campaign("simulate " + quote(tiny) + scene + " --seed 1 --json");
-    const Outcome b = campaign("simulate " + quote(tiny) + scene + " --seed 1 --json");
+    // the store's seed_str form ('s' and the digits) is the same seed (issue 43, item 7)
+    const Outcome b = campaign("simulate " + quote(tiny) + scene + " --seed s1 --json");
     ASSERT_EQ(a.code, 0) << a.err;
     ASSERT_EQ(b.code, 0) << b.err;
     const std::string sa = without_wall_clock(a.out), sb = without_wall_clock(b.out);
@@ -237,6 +238,13 @@ TEST(CampaignCli, BadCommandLinesExitTwoNamingTheProblem) {
         {"simulate " + t + " " + t + scene + " --seed 1", {"one sweep file"}},
         {"simulate /nonexistent/sweep.toml" + scene + " --seed 1", {"/nonexistent/sweep.toml"}},
         {"simulate " + t + " --D 500 --theta 60 --seed 1", {"D_cm"}},
+        // a value in the wrong unit gets the sweep file's check and hint (issue 43, item 3)
+        {"simulate " + t + " --D 0.023 --theta 60 --seed 1",
+         {"D_cm = 0.023", "in centimetres", "write D_cm = 2.3"}},
+        {"simulate " + t + " --D 2.2 --theta 0.785 --seed 1",
+         {"theta_deg = 0.785", "in degrees", "theta_deg = 45"}},
+        {"simulate " + t + scene + " --seed s1.5", {"--seed", "seed_str", "'s1.5'"}},
+        {"run " + t + " --thread 2", {"--thread", "did you mean '--threads'"}},
         {"frobnicate", {"unknown command 'frobnicate'", "simulate"}},
         {"run", {"missing the sweep file"}},
         {"help frobnicate", {"frobnicate"}},
@@ -295,6 +303,8 @@ TEST(CampaignCli, EveryListedCommandHasHelpAndRuns) {
         EXPECT_EQ(h.code, 0) << name << "\n" << h.err;
         EXPECT_NE(h.out.find("usage: campaign " + name), std::string::npos) << name << h.out;
         EXPECT_EQ(campaign(name + " --help").out, h.out) << name;
+        // the README: "`campaign help COMMAND` shows each command's options and exit codes"
+        EXPECT_NE(h.out.find("\nexit codes: 0 "), std::string::npos) << name << "\n" << h.out;
     }
     for (const char* code :
          {"  0  success", "  1  unexpected or store error", "  2  bad command line or sweep file",

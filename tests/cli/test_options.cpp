@@ -38,6 +38,18 @@ TEST(ParseSeed, RejectsEverythingElseNamingOptionAndText) {
     EXPECT_NE(msg.find("at most 18446744073709551615"), std::string::npos) << msg;
 }
 
+TEST(ParseSeedText, AcceptsTheStoresSeedStrAsWellAsDigits) {
+    // the store's seed_str column ('s' and the digits) pasted back into --seed (issue 43, item 7)
+    EXPECT_EQ(parse_seed_text("--seed", "s17273910456787253617"), 17273910456787253617ull);
+    EXPECT_EQ(parse_seed_text("--seed", "42"), 42u);
+    EXPECT_EQ(parse_seed_text("--seed", "s0"), 0u);
+    for (const char* bad : {"s", "ss1", "s-1", "S12", "s1.5", "s 1", "1s"}) {
+        const std::string msg = error_of([&] { parse_seed_text("--seed", bad); });
+        EXPECT_NE(msg.find("--seed must be a non-negative integer"), std::string::npos) << bad;
+        EXPECT_NE(msg.find("seed_str"), std::string::npos) << msg;
+    }
+}
+
 TEST(ParseFinite, AcceptsDecimalNumbers) {
     EXPECT_DOUBLE_EQ(parse_finite("--D", "3"), 3.0);
     EXPECT_DOUBLE_EQ(parse_finite("--D", "2.7"), 2.7);

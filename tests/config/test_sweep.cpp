@@ -237,6 +237,38 @@ TEST(SweepSanity, AnOutletNarrowerThanOneDiskNamesTheKeyTheValueAndTheUnit) {
     EXPECT_NO_THROW(parse("[hopper]\nwidth_cm = 12\nparticles = 500\nD_cm = 0.61\n"));
 }
 
+// Issue 43, item 3: a wall angle in radians (theta_deg = 0.785 for 45 degrees) is refused with
+// the value in degrees, in a sweep file and by scene_at (campaign simulate --theta); so is an
+// outlet in metres given to scene_at (--D 0.023).
+TEST(SweepSanity, AWallAngleInRadiansIsRefusedInTheFileAndBySceneAt) {
+    const std::string msg = error_of(
+        "[hopper]\nwidth_cm = 12\nparticles = 500\nD_cm = 2.5\n[campaign]\nname = \"u\"\n"
+        "[sweep]\ntheta_deg = [0.785, 60]\n");
+    EXPECT_THAT(msg, HasSubstr("theta_deg = 0.785 is the wall angle in degrees"));
+    EXPECT_THAT(msg, HasSubstr("write theta_deg = 45"));
+    EXPECT_THAT(error_of("[hopper]\nwidth_cm = 12\nparticles = 500\ntheta_deg = 1.5708\n"),
+                HasSubstr("write theta_deg = 90"));
+    // a flat bottom and real angles pass
+    EXPECT_NO_THROW(parse("[hopper]\nwidth_cm = 12\nparticles = 500\ntheta_deg = 0\n"));
+    EXPECT_NO_THROW(parse("[hopper]\nwidth_cm = 12\nparticles = 500\ntheta_deg = 2\n"));
+    const SweepFile s = load_sweep(source_dir / "campaigns/tiny.toml");
+    const auto what = [&](double D, double theta) {
+        try {
+            scene_at(s, D, theta);
+        } catch (const ConfigError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_THAT(what(2.2, 0.785), AllOf(HasSubstr("tiny.toml"), HasSubstr("write theta_deg = 45")));
+    EXPECT_THAT(what(0.023, 60), AllOf(HasSubstr("D_cm = 0.023"), HasSubstr("write D_cm = 2.3")));
+    EXPECT_EQ(what(2.2, 60), "");
+    // a width in metres gets its value in centimetres (issue 43, item 10)
+    EXPECT_THAT(error_of("[hopper]\nwidth_cm = 0.1\nparticles = 500\nD_cm = 2.5\n"),
+                AllOf(HasSubstr("hopper.width_cm = 0.1 must exceed"),
+                      HasSubstr("width_cm is in centimetres: for 10 cm write width_cm = 10")));
+}
+
 TEST(SweepSanity, APackingTallerThanTwentyWidthsIsRefused) {
     // 20000 disks in a 12 cm hopper: about 7 m of packing.
     const std::string msg = error_of("[hopper]\nwidth_cm = 12\nparticles = 20000\nD_cm = 3\n");
