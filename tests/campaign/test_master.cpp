@@ -140,6 +140,11 @@ class Harness {
     }
     store::Store& store() { return store_; }
 
+    // A deadline `seconds` from now, set just before run() (a deadline set before the harness
+    // was built would lose the time building the store and the threads took, which a loaded
+    // machine makes long).
+    void set_deadline_in(double seconds) { options_.deadline = store::unix_now() + seconds; }
+
     // The cost model's expected seconds of every task (0 = unknown by default).
     void set_expected(double seconds) {
         for (auto& t : todo_)
@@ -254,14 +259,23 @@ TEST(Master, HandsOutTasksInTheGivenOrder) {
 }
 
 TEST(Master, DispatchIsDynamic) {
-    // Task 0 is slow; while it runs, the other worker takes every other task.
-    Harness h(11, 2, [](const TaskRef& t, int, const engine::RunHooks& hooks) {
-        cooperative_sleep(t.task_id == 0 ? 300ms : 5ms, hooks);
+    // Task 0 is slow: it runs until the last task has started (a condition, not a time: it was
+    // 300 ms, which the other 10 tasks could outlast on a loaded machine), so the other worker
+    // must take every other task. A master that handed tasks out in a fixed order would leave
+    // task 0 waiting until its 30 s bound and the last task on the slow worker.
+    std::atomic<int> others_started{0};
+    Harness h(11, 2, [&](const TaskRef& t, int, const engine::RunHooks& hooks) {
+        if (t.task_id != 0) {
+            ++others_started;
+            cooperative_sleep(5ms, hooks);
+            return ok(t);
+        }
+        const auto bound = std::chrono::steady_clock::now() + 30s;
+        while (others_started < 10 && std::chrono::steady_clock::now() < bound)
+            cooperative_sleep(2ms, hooks);
         return ok(t);
     });
-    const auto t0 = std::chrono::steady_clock::now();
     EXPECT_EQ(h.run().stored, 11);
-    EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);  // generous: a busy machine
     const int slow_worker = h.ran_on(0).at(0);
     for (int i = 1; i < 11; ++i)
         EXPECT_NE(h.ran_on(i).at(0), slow_worker) << "task " << i;
@@ -397,6 +411,8 @@ TEST(Master, DrainStopsRunningTasksWhenTheGraceTimeEnds) {
     self = &h;
     const auto t0 = std::chrono::steady_clock::now();
     const MasterReport r = h.run();
+    // Margin: the grace (0.1 s) and the stop take about 0.1 s; 2 s is 20 times that, and far
+    // from the 10 s of tasks left to finish (what a drain that ignored the grace would take).
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);
     EXPECT_EQ(r.stored, 0);
     EXPECT_EQ(r.interrupted, 2);
@@ -413,6 +429,8 @@ TEST(Master, StopNowInterruptsAtOnce) {
     self = &h;
     const auto t0 = std::chrono::steady_clock::now();
     const MasterReport r = h.run();
+    // Margin: a stop takes a few ms (the task looks at its flag every 2 ms); 1 s is 100 times
+    // that, and a tenth of the 10 s the task would run if not stopped.
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
     EXPECT_EQ(r.interrupted, 1);
     EXPECT_EQ(r.not_started, 2);
@@ -435,6 +453,8 @@ TEST(Master, SleepsWhileWaiting) {
         opt);
     const MasterReport r = h.run();
     EXPECT_EQ(r.stored, 1);
+    // No race: the task sleeps 0.8 s whatever the load, and load lengthens the wall time, not
+    // the CPU time (a spinning master: 0.8 s of CPU). The first progress line is due at 0.2 s.
     EXPECT_GT(r.wall_seconds, 0.75);
     EXPECT_LT(r.cpu_seconds / r.wall_seconds, 0.05) << r.cpu_seconds << " s of CPU";
     EXPECT_NE(h.log.str().find("campaign: 0/1 done, 1 running, 0 failed"), std::string::npos)
@@ -445,6 +465,8 @@ TEST(Master, SleepsWhileWaiting) {
 // its worker sends no heartbeat) keeps its realization no longer than the limit: it is reported
 // and handed to another worker. Its late result is compared with the stored one, never stored
 // twice.
+// Margin of the tests below: a worker whose task advances sends a heartbeat every 0.125 s (a
+// quarter of the limit), so only one not scheduled for 0.5 s, 4 heartbeats, looks silent.
 MasterOptions short_timeout() {
     MasterOptions o = Harness::fast_options();
     o.worker_timeout = 0.5;
@@ -486,14 +508,31 @@ TEST(Master, ASilentWorkersRealizationGoesToAnotherAndItsLateResultIsStoredOnce)
 }
 
 TEST(Master, ALateResultArrivingFirstIsStoredAndTheOtherCopyOnlyCompared) {
+    // The first copy is silent until the second has started (so it is reassigned, however late
+    // the master notices: it was 0.8 s against the 0.5 s limit), then returns; the second
+    // returns 0.3 s after that (the first copy's result is sent the moment it returns), with a
+    // different result. (Each wait bounded by 30 s against a hang.)
+    std::atomic<bool> second_started{false}, first_returned{false};
+    const auto until = [](const std::atomic<bool>& flag, const engine::RunHooks* hooks) {
+        const auto bound = std::chrono::steady_clock::now() + 30s;
+        while (!flag && std::chrono::steady_clock::now() < bound) {
+            if (hooks)
+                cooperative_sleep(2ms, *hooks);
+            else
+                std::this_thread::sleep_for(2ms);  // silent: no progress, no heartbeat
+        }
+    };
     Harness h(
         1, 2,
         [&](const TaskRef& t, int call, const engine::RunHooks& hooks) {
             engine::RealizationResult r = ok(t);
             if (call == 1) {
-                std::this_thread::sleep_for(800ms);  // silent, then back
+                until(second_started, nullptr);  // silent, then back
+                first_returned = true;
             } else {
-                cooperative_sleep(700ms, hooks);
+                second_started = true;
+                until(first_returned, &hooks);
+                cooperative_sleep(300ms, hooks);
                 r.discharged = 77;  // a different result: a bad node
             }
             return r;
@@ -541,6 +580,7 @@ TEST(Worker, QuitDuringATaskStopsItAndSendsNothing) {
     const auto t0 = std::chrono::steady_clock::now();
     ch.master().send(1, Message::make(MessageKind::quit));
     worker.join();
+    // Margin: the task looks at its flag every 2 ms; 1 s is a fifth of the 5 s it would run.
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
     EXPECT_FALSE(finished) << "the task ran to its end";
     EXPECT_EQ(ch.sent_to_master(), 0u);
@@ -581,7 +621,9 @@ TEST(Worker, AStopActsWithinAStepHoweverSlowTheStepsAre) {
     const auto took = std::chrono::steady_clock::now() - t0;
     ASSERT_TRUE(reply);
     EXPECT_EQ(reply->second.kind, MessageKind::interrupted);
-    EXPECT_LT(took, 300ms) << std::chrono::duration<double>(took).count() << " s";
+    // Within a step or two (20-40 ms). The bound, 500 ms, leaves a loaded machine 10 times
+    // that and still fails a stop that waits for the 50-step check: 45 more steps, 0.9 s.
+    EXPECT_LT(took, 500ms) << std::chrono::duration<double>(took).count() << " s";
     ch.master().send(1, Message::make(MessageKind::quit));
     worker.join();
 }
@@ -609,7 +651,6 @@ TEST(Worker, StaleStopRequestsAreIgnored) {
 TEST(MasterDeadline, NothingStartsThatCannotEndBeforeTheDeadline) {
     MasterOptions opt = Harness::fast_options();
     opt.grace = 0.5;
-    opt.deadline = store::unix_now() + 2.0;
     opt.measured_seconds = opt.measured_expected = 10.0;  // the cost model measured right
     Harness h(
         4, 2,
@@ -618,9 +659,10 @@ TEST(MasterDeadline, NothingStartsThatCannotEndBeforeTheDeadline) {
         },
         opt);
     h.set_expected(5.0);  // each needs 5 s; 1.5 s are left
+    h.set_deadline_in(2.0);
     const auto t0 = std::chrono::steady_clock::now();
     const MasterReport rep = h.run();
-    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);  // nothing runs: a few ms
     EXPECT_TRUE(rep.stopped);
     EXPECT_EQ(rep.stop_reason, "the deadline");
     EXPECT_EQ(rep.deadline_skipped, 4);
@@ -636,7 +678,6 @@ TEST(MasterDeadline, NothingStartsThatCannotEndBeforeTheDeadline) {
 TEST(MasterDeadline, UnmeasuredEstimatesDoNotKeepTasksFromStarting) {
     MasterOptions opt = Harness::fast_options();
     opt.grace = 0.5;
-    opt.deadline = store::unix_now() + 1.5;
     Harness h(
         2, 2,
         [](const TaskRef& t, int, const engine::RunHooks& hooks) {
@@ -646,6 +687,7 @@ TEST(MasterDeadline, UnmeasuredEstimatesDoNotKeepTasksFromStarting) {
         },
         opt);
     h.set_expected(100.0);  // a guess far beyond the deadline
+    h.set_deadline_in(1.5);  // task 1 (50 ms) ends long before deadline - grace (1 s)
     const MasterReport rep = h.run();
     EXPECT_EQ(h.order().size(), 2u);
     EXPECT_EQ(rep.stored, 1);
@@ -657,7 +699,6 @@ TEST(MasterDeadline, UnmeasuredEstimatesDoNotKeepTasksFromStarting) {
 TEST(MasterDeadline, ShortTasksRunAndARunningOneIsStoppedAtTheDeadline) {
     MasterOptions opt = Harness::fast_options();
     opt.grace = 0.5;
-    opt.deadline = store::unix_now() + 1.5;
     // Task 0 hangs on (cooperatively) far beyond the deadline; the others take 50 ms.
     Harness h(
         4, 2,
@@ -668,10 +709,13 @@ TEST(MasterDeadline, ShortTasksRunAndARunningOneIsStoppedAtTheDeadline) {
         },
         opt);
     h.set_expected(0.01);
+    h.set_deadline_in(1.5);
     const auto t0 = std::chrono::steady_clock::now();
     const MasterReport rep = h.run();
     const double took =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // Margins: tasks 1-3 need 0.15 s of the 1 s before deadline - grace; the stop there takes
+    // a few ms of the 0.5 s before the deadline; task 0 runs from a dispatch a few ms after t0.
     EXPECT_GT(took, 0.8);  // stopped at deadline - grace (1.0 s), not before ...
     EXPECT_LT(took, 1.5);  // ... and before the deadline itself
     EXPECT_TRUE(rep.stopped);
