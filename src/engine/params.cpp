@@ -170,6 +170,7 @@ void validate_scene(const SceneParams& p) {
         throw ConfigError("parameter particles.count = " + std::to_string(s.count) +
                           " is out of range: allowed [1, 10000000]");
     require_range("particles.small_fraction", s.small_fraction, 0.0, 1.0);
+    require_range("particles.size_spread", s.size_spread, 0.0, 0.3);
     require_range("particles.thickness", s.thickness, 0.0, 1.0, true, " m");
     require_range("particles.density", s.density, 0.0, 1e5, true, " kg/m^3");
     require_range("material.e_n", m.system.e_n, 0.0, 1.0, true);

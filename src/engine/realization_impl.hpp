@@ -88,8 +88,13 @@ struct Realization::Impl {
         for (const auto& w : layout.gate)
             gate_ids.push_back(sys->add_wall(w.pos, w.diameter));
         for (const auto& f : layout.fill) {
-            const double m = f.large ? c.m_large : c.m_small;
-            const double I = f.large ? c.I_large : c.I_small;
+            double m = f.large ? c.m_large : c.m_small;
+            double I = f.large ? c.I_large : c.I_small;
+            if (p.particles.size_spread > 0.0) {  // m ~ d^2, I ~ m d^2 (hopper.size_spread)
+                const double s = f.diameter / (f.large ? p.particles.d_large : p.particles.d_small);
+                m *= s * s;
+                I *= s * s * s * s;
+            }
             const int id = sys->add_particle(f.pos, f.diameter, m, I, f.vel, 0.0);
             ids.remember(id, m, f.diameter, I);
         }

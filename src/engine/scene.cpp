@@ -106,7 +106,9 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
     const double dw = g.wall_diameter;
     const double spacing = g.wall_spacing * dw;
     const double gap = p.protocol.fill_gap * ps.d_large;
-    const double a = ps.d_large + gap;  // lattice spacing
+    // The largest disk: d_large, or d_large (1 + w) with a size spread w (hopper.size_spread).
+    const double d_max = ps.size_spread > 0.0 ? ps.d_large * (1.0 + ps.size_spread) : ps.d_large;
+    const double a = d_max + gap;  // lattice spacing
     const bool slot = is_slot(g);
     const double s = std::sin(g.theta), c = std::cos(g.theta);
     const double x0 = wall_line_crossing(g);  // centre line of the right funnel wall at y = 0
@@ -123,7 +125,7 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
     // Fill: a square lattice, row by row from the gate up. A site is allowed when a large disk
     // centred there keeps `gap` clear of every wall particle whatever its position on the wall's
     // centre line: distance to the centre line >= d_w/2 + d_large/2 + gap.
-    const double clear = std::max(dw, d_edge) / 2 + ps.d_large / 2 + gap;
+    const double clear = std::max(dw, d_edge) / 2 + d_max / 2 + gap;
     // The lowest row: above the gate (which sits at the edge disks' height) by `clear`, plus
     // protocol.fill_base.
     const double y_first = edge.y() + p.protocol.fill_base * ps.d_large + clear;
@@ -152,6 +154,8 @@ SceneLayout build_scene(const SceneParams& p, core::Rng& rng) {
             f.pos = Vec2(first + k * a, y);
             f.large = !(rng.uniform() < ps.small_fraction);
             f.diameter = f.large ? ps.d_large : ps.d_small;
+            // (drawn only with a spread, so that the default's sequence is unchanged)
+            if (ps.size_spread > 0.0) f.diameter *= 1.0 + ps.size_spread * rng.uniform(-1.0, 1.0);
             const double vx = rng.uniform(-p.protocol.fill_speed, p.protocol.fill_speed);
             const double vy = rng.uniform(-p.protocol.fill_speed, p.protocol.fill_speed);
             f.vel = Vec2(vx, vy);

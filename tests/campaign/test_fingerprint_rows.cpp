@@ -164,6 +164,9 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
     // The steady state keeps the springs at a re-insertion (round 3's fix): said in its text,
     // so that stores written before the fix are refused.
     if (q.mode != d.protocol.mode) l.add("protocol.reinsertion", std::string("keeps_springs"));
+    // Polydispersity (issue 39): only off its default.
+    if (p.particles.size_spread != d.particles.size_spread)
+        l.add("particles.size_spread", p.particles.size_spread);
     return l.take();
 }
 

@@ -314,3 +314,78 @@ TEST(Choices, RealizationPassesGammaTRatioSlipRuleAndLeverToTheSystem) {
     EXPECT_TRUE(cfg.wall.slip_spring_only);
     EXPECT_TRUE(cfg.contact_lever);
 }
+
+// Polydispersity (hopper.size_spread = w, issue 39; docs/model.md "Particles"): every disk's
+// diameter lies within [d (1 - w), d (1 + w)] of its species, the sizes are spread over that
+// range (not two values), and each mass is the nominal one times (d / d_nom)^2. At w = 0 the
+// layout is the default's, bit for bit (the generator draws nothing more). A realization with a
+// spread runs, and a checkpoint of its steady state (re-inserted disks of 400 sizes) continues
+// to the same result.
+namespace {
+TEST(Choices, SizeSpreadDrawsEachDiameterAboutItsSpeciesAndScalesTheMass) {
+    SceneParams p = scene(45.0);
+    const SceneLayout two = build(p);
+    p.particles.size_spread = 0.0;
+    const SceneLayout zero = build(p);
+    ASSERT_EQ(two.fill.size(), zero.fill.size());
+    for (std::size_t i = 0; i < two.fill.size(); ++i)
+        ASSERT_EQ(two.fill[i].diameter, zero.fill[i].diameter);
+    const double w = 0.1;
+    p.particles.size_spread = w;
+    const SceneLayout poly = build(p);
+    double lo_s = 9, hi_s = 0, lo_l = 9, hi_l = 0;
+    for (const auto& f : poly.fill) {
+        const double s = f.diameter / (f.large ? p.particles.d_large : p.particles.d_small);
+        EXPECT_GE(s, 1 - w);
+        EXPECT_LE(s, 1 + w);
+        (f.large ? lo_l : lo_s) = std::min(f.large ? lo_l : lo_s, s);
+        (f.large ? hi_l : hi_s) = std::max(f.large ? hi_l : hi_s, s);
+    }
+    // 400 draws: the extremes within 2 % of the range's ends for both species.
+    EXPECT_LT(lo_s, 1 - 0.9 * w);
+    EXPECT_GT(hi_s, 1 + 0.9 * w);
+    EXPECT_LT(lo_l, 1 - 0.9 * w);
+    EXPECT_GT(hi_l, 1 + 0.9 * w);
+    // Masses in a realization: m = rho pi d^2 / 4 h for every disk.
+    Realization r(p, 11);
+    auto& sys = r.system();
+    const auto rad = sys.r();
+    const auto m = sys.m();
+    ASSERT_EQ(int(rad.size()), p.particles.count);
+    for (std::size_t i = 0; i < rad.size(); ++i) {
+        const double d = 2 * rad[i];
+        EXPECT_NEAR(m[i], p.particles.density * pi * d * d / 4 * p.particles.thickness,
+                    1e-12 * m[i]);
+    }
+    EXPECT_THROW(
+        {
+            SceneParams q = p;
+            q.particles.size_spread = 0.31;
+            validate_scene(q);
+        },
+        hopper::core::ConfigError);
+}
+
+TEST(Choices, ASteadyStateWithASizeSpreadContinuesFromItsCheckpoint) {
+    SceneParams p = scene(45.0);
+    p.particles.size_spread = 0.1;
+    p.protocol.mode = ProtocolMode::steady_state;
+    p.protocol.jams_per_realization = 3;
+    p.protocol.max_time = 3.0;
+    const RealizationResult whole = run_realization(p, 5);
+    Realization part(p, 5);
+    part.settle();
+    part.open();
+    part.advance(1.0);
+    int reinserted = 0;
+    for (int i = 0; i < part.system().mobile_count(); ++i)
+        reinserted += part.system().id(i) >= p.particles.count;
+    ASSERT_GT(reinserted, 0) << "no disk re-inserted before the checkpoint: nothing tested";
+    const auto state = part.save_state();
+    const RealizationResult resumed = resume_realization(p, 5, state);
+    EXPECT_EQ(resumed.status, whole.status);
+    EXPECT_EQ(resumed.survival_times, whole.survival_times);
+    EXPECT_EQ(resumed.n_jams, whole.n_jams);
+    EXPECT_GT(whole.discharged, 0);
+}
+}  // namespace

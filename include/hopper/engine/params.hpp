@@ -91,6 +91,10 @@ struct HopperGeometry {
 struct ParticleSpec {
     int count = 8750;              // N
     double small_fraction = 0.62;  // number fraction of small disks
+    // Polydispersity (issue 39): each disk's diameter uniform in [d (1 - w), d (1 + w)] about
+    // its species' d_small or d_large, mass and moment of inertia scaled with it (m ~ d^2,
+    // I ~ d^4 at fixed thickness and density). 0 = exactly two sizes (the default).
+    double size_spread = 0.0;
     double d_small = 0.602 * cm;
     double d_large = 0.770 * cm;
     double thickness = 0.32 * cm;  // h: disk thickness (sets the mass)
