@@ -4,10 +4,13 @@
 usage: /usr/bin/python3 analysis/export.py STORE.h5 [--csv DIR] [--vtk DIR]
 
 --csv DIR  one CSV file per table of hopper_store (columns as there, SI units, the label's D_cm
-           and theta_deg on every row): points, realizations, survival (duration, event: for
-           lifelines or R's survival), events, curves, jams, exits; after `campaign analyze`
-           also analysis, beverloo, jam_rate, km and, with fields, fields (one row per point and
-           cell, long form).
+           and theta_deg on every row): points, realizations, survival (duration > 0, event: for
+           lifelines or R's Surv and survreg; duration_stored the store's value, 0.0 for a jam at
+           the opening: hopper_store.Store.survival), events, curves, jams, exits, arches (one
+           row per jam; the disks' ids, x and y as space-separated lists); after `campaign
+           analyze` also analysis, beverloo, jam_rate, km, avalanche (the <s>(D) fits, for
+           stores with avalanche sizes) and, with fields, fields (one row per point and cell,
+           long form).
 --vtk DIR  the merged field maps of every point with fields as VTK image data
            (fields_<label>.vti: cells of the grid, mean and std of vx, vy, speed, pressure,
            windows; NaN where no window reached a cell) that ParaView opens natively.
@@ -28,8 +31,9 @@ else:  # run as a script: campaign runs analysis/export.py by its path
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from hopper_store import open_store  # noqa: E402
 
-TABLES = ["points", "realizations", "survival", "events", "curves", "jams", "exits"]
-ANALYSIS_TABLES = ["analysis", "beverloo", "jam_rate", "km"]
+TABLES = ["points", "realizations", "survival", "events", "curves", "jams", "exits", "arches"]
+ANALYSIS_TABLES = ["analysis", "beverloo", "jam_rate", "km", "avalanche"]
+LIST_COLUMNS = {"arches": ["ids", "x", "y"]}  # a list per row, written space-separated
 
 
 def file_part(label):
@@ -41,7 +45,14 @@ def export_csv(s, out):
     written = []
     names = TABLES + (ANALYSIS_TABLES if s.has_analysis else [])
     for name in names:
+        if name == "avalanche" and "avalanche" not in s._f["analysis"]:
+            continue  # analyzed before avalanche sizes existed
         df = getattr(s, name)
+        if name in LIST_COLUMNS:
+            df = df.copy()
+            for c in LIST_COLUMNS[name]:
+                df[c] = [" ".join(repr(v) if isinstance(v, float) else str(v) for v in values)
+                         for values in df[c]]
         path = os.path.join(out, name + ".csv")
         df.to_csv(path, index=name in ("points", "realizations", "analysis"))
         written.append(path)

@@ -5,7 +5,7 @@
     with open_store("build/quickstart.h5") as s:
         s.points          # one row per point: label, D_cm, theta_deg, every scene setting typed
         s.realizations    # one row per stored realization (seed and seed_str, status, jams, ...)
-        s.survival        # one row per survival interval: duration (s), event (1 jam, 0 censored)
+        s.survival        # one row per survival interval: duration (s, > 0), event (1 jam, 0 censored)
         s.events, s.curves, s.jams, s.exits      # the ragged per-realization arrays, long form
         s.analysis        # /analysis/points (after `campaign analyze`; NaN where not computable)
         s.beverloo, s.jam_rate, s.km              # the fits and Kaplan-Meier curves of /analysis
@@ -43,7 +43,7 @@ import h5py
 import numpy as np
 import pandas as pd
 
-__all__ = ["open_store", "readable", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings"]
+__all__ = ["open_store", "readable", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings", "positive_durations"]
 
 # Scene parameter -> (short symbol for legends, unit shown, factor from the stored SI value).
 # Parameters not listed are shown by their name and stored value.
@@ -143,6 +143,23 @@ def varied_settings(points, scene_columns):
             continue
         kept.append(c)
     return kept
+
+
+DETECTOR_INTERVAL_S = 1e-4  # engine default (protocol.detector_interval_s) for old stores
+
+
+def positive_durations(survival, points):
+    """The survival table's durations with every 0.0 (a jam at the opening, or a censored
+    interval of no length) replaced by half its point's detector interval: see Store.survival."""
+    d = survival["duration"].to_numpy(float).copy()
+    if "protocol.detector_interval_s" in points:
+        half = 0.5 * points["protocol.detector_interval_s"].astype(float).fillna(
+            DETECTOR_INTERVAL_S).to_numpy()[survival["point"].to_numpy()] if len(d) else d
+    else:
+        half = np.full(len(d), 0.5 * DETECTOR_INTERVAL_S)
+    zero = d <= 0
+    d[zero] = half[zero]
+    return d
 
 
 class Store:
@@ -383,9 +400,19 @@ class Store:
         """One row per survival interval: row, point, realization, label, D_cm, theta_deg,
         interval (0-based within the realization), duration (s of discharge time), event (1: ended
         by a jam, 0: right-censored), avalanche_size (grains that crossed the outlet during the
-        interval; NaN for realizations stored before avalanche sizes were recorded). Failed
-        realizations are left out. Ready for lifelines.KaplanMeierFitter().fit(df.duration,
-        df.event) or R's Surv(duration, event)."""
+        interval; NaN for realizations stored before avalanche sizes were recorded),
+        duration_stored (s: the store's value, which `campaign analyze` uses). Failed
+        realizations are left out. Ready for lifelines (KaplanMeierFitter().fit(df.duration,
+        df.event), ExponentialFitter, ...) or R's Surv(duration, event) and survreg.
+
+        duration is duration_stored except where that is 0.0: a jam at the opening (the outlet
+        region held no particle at any look of the jam detector since the interval began, so the
+        jam formed within the first detector interval) or a censored interval of no length.
+        Survival tools refuse a time of 0 (R's survreg: "Invalid survival times for this
+        distribution"; lifelines' parametric fitters), so such an interval's duration is half
+        the point's detector interval (protocol.detector_interval_s, 1e-4 s by default: 5e-5 s,
+        the middle of where the jam can lie). No row is dropped; tau from duration differs from
+        campaign analyze's by at most that half interval per such row."""
         def make():
             has_sizes = "avalanche_size" in self._f["ragged"]
             df = self._ragged("survival", ["survival_times", "censored"]
@@ -403,6 +430,8 @@ class Store:
                 df["avalanche_size"] = np.full(len(df), np.nan)
             df = self._add_point_columns(df)
             df.insert(3, "interval", df.groupby("row").cumcount())
+            df["duration_stored"] = df["duration"].astype(float)
+            df["duration"] = positive_durations(df, self.points)
             ok = self.realizations["status"].to_numpy()[df["row"].to_numpy()] != "failed" \
                 if len(df) else np.zeros(0, bool)
             return df[ok].reset_index(drop=True)

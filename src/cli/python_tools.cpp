@@ -199,8 +199,10 @@ void print_plot_help(std::ostream& os) {
 void print_export_help(std::ostream& os) {
     os << "usage: campaign export STORE.h5 [--csv DIR] [--vtk DIR] | --snapshot FILE\n\n"
           "Writes the store's tables as CSV files (points with every setting, realizations,\n"
-          "survival intervals as duration and event, events, discharge curves, jams, exits, and\n"
-          "after the analysis its tables) and the field maps as VTK image data for ParaView.\n"
+          "survival intervals as duration and event, events, discharge curves, jams, exits,\n"
+          "arches, and after the analysis its tables with the avalanche fits) and the field\n"
+          "maps as VTK image data for ParaView. survival.csv is ready for R's survreg and\n"
+          "lifelines: a jam at the opening (stored duration 0) has half the detector interval.\n"
           "In Python, analysis/hopper_store.py reads the same tables as pandas DataFrames.\n"
           "While a `campaign run` writes the store, export, plot and open_store() read a\n"
           "snapshot of its journal: every realization stored at that moment.\n\n"

@@ -87,9 +87,10 @@ with open_store(store_path) as s:
     check(np.array_equal(lengths, raw["survival_length"][:]), "intervals per realization")
     check(set(sv["event"]) <= {0, 1} and sv["duration"].ge(0).all(), "event 0/1, duration >= 0")
     a = s.analysis
+    check(np.array_equal(sv["duration"], sv["duration_stored"]), "no zero durations here")
     for i in p.index:
         one = sv[sv["point"] == i]
-        T, n = float(one["duration"].sum()), int(one["event"].sum())
+        T, n = float(one["duration_stored"].sum()), int(one["event"].sum())
         check(math.isclose(T, a.at[i, "total_observed_time"], rel_tol=1e-12),
               "point %d: total time %g vs analysis %g" % (i, T, a.at[i, "total_observed_time"]))
         check(n == a.at[i, "n_jams"], "point %d: jams %d vs analysis %d" % (i, n, a.at[i, "n_jams"]))
@@ -124,9 +125,22 @@ with open_store(store_path) as s:
 
     # the export wrote the same rows
     for name in ("points", "realizations", "survival", "events", "curves", "jams", "exits",
-                 "analysis", "beverloo", "jam_rate", "km", "fields"):
+                 "arches", "analysis", "beverloo", "jam_rate", "km", "avalanche", "fields"):
         path = csv_dir / (name + ".csv")
         check(path.exists(), "export wrote %s" % path.name)
+    # every table the reader has is exported (issue 43, item 5: arches and avalanche were not)
+    if (csv_dir / "arches.csv").exists():
+        back = pd.read_csv(csv_dir / "arches.csv")
+        ar = s.arches
+        check(len(back) == len(ar) > 0 and list(back.columns) == list(ar.columns),
+              "arches.csv: %d rows, columns %s" % (len(back), list(back.columns)))
+        check([[int(v) for v in str(t).split()] for t in back["ids"]] ==
+              [[int(v) for v in ids] for ids in ar["ids"]], "arches.csv ids round trip")
+        check(all(np.array_equal(np.array(str(t).split(), float), x)
+                  for t, x in zip(back["x"], ar["x"])), "arches.csv x round trip, exact")
+    if (csv_dir / "avalanche.csv").exists():
+        back = pd.read_csv(csv_dir / "avalanche.csv")
+        check(len(back) == len(s.avalanche) == 2, "avalanche.csv: one row per wall angle")
     if (csv_dir / "realizations.csv").exists():
         back = pd.read_csv(csv_dir / "realizations.csv")
         check(back["theta_deg"].isin([45.0, 60.0]).all(), "realizations.csv theta_deg: %r"
@@ -146,6 +160,62 @@ with open_store(store_path) as s:
         back = pd.read_csv(csv_dir / "survival.csv")
         check(len(back) == len(sv) and np.allclose(back["duration"], sv["duration"], rtol=0,
                                                    atol=1e-15), "survival.csv round trip")
+
+# A jam at the opening (issue 43, item 1): the store holds an interval of 0.0 with event 1, which
+# R's survreg refuses ("Invalid survival times for this distribution") and so do lifelines'
+# parametric fitters. A copy of the store with one such interval: the survival table and
+# survival.csv hold it as half the detector interval (duration_stored keeps 0.0), nothing is
+# dropped, and R's survreg (when R and its survival package are installed) or the same check in
+# Python accepts every CSV the export writes.
+import shutil  # noqa: E402
+import subprocess  # noqa: E402
+import tempfile  # noqa: E402
+
+with tempfile.TemporaryDirectory() as tmp:
+    tmp = pathlib.Path(tmp)
+    copy = tmp / "zero.h5"  # the HDF5 file alone: no journal, so it is read as it stands
+    shutil.copy(store_path, copy)
+    with h5py.File(copy, "r+") as g:
+        r = g["realizations"]
+        k = int(r["survival_start"][0])  # realization row 0's first interval
+        cens = h5py.check_enum_dtype(g["ragged/censored"].dtype)
+        g["ragged/censored"][k] = cens["FALSE"] if cens else 0
+        g["ragged/survival_times"][k] = 0.0
+    with open_store(copy) as z:
+        zs = z.survival
+        zero = zs[(zs["row"] == 0) & (zs["interval"] == 0)]
+        check(len(zs) == len(sv), "no interval dropped: %d of %d" % (len(zs), len(sv)))
+        check(len(zero) == 1 and zero["duration_stored"].iloc[0] == 0.0
+              and zero["event"].iloc[0] == 1, "the zero interval is there: %s" % zero.to_dict())
+        check(len(zero) == 1 and zero["duration"].iloc[0] == 5e-5,
+              "its duration is half the detector interval (5e-5 s): %s" % zero["duration"].tolist())
+        check((zs["duration"] > 0).all(), "every duration > 0")
+    out = tmp / "csv"
+    done = subprocess.run([sys.executable, str(src / "analysis" / "export.py"), str(copy),
+                           "--csv", str(out)], capture_output=True, text=True)
+    check(done.returncode == 0, "export of the copy: %s" % done.stderr)
+    for csv in sorted(out.glob("*.csv")) if out.exists() else []:
+        t = pd.read_csv(csv)
+        if not {"duration", "event"} <= set(t.columns):
+            continue
+        rscript = shutil.which("Rscript")
+        has_survival = rscript and subprocess.run(
+            [rscript, "-e", "library(survival)"], capture_output=True).returncode == 0
+        if has_survival:
+            fit = subprocess.run([rscript, "-e", "library(survival); d <- read.csv('%s'); "
+                                  "f <- survreg(Surv(duration, event) ~ 1, data = d, "
+                                  "dist = 'exponential'); cat(exp(coef(f)))" % csv],
+                                 capture_output=True, text=True)
+            check(fit.returncode == 0, "R survreg on %s: %s" % (csv.name, fit.stderr.strip()))
+        else:
+            # survreg's own test for the exponential (survreg.fit: "Invalid survival times for
+            # this distribution" when any time <= 0) and lifelines' (positive durations), then
+            # the censored exponential's maximum-likelihood mean
+            check((t["duration"] > 0).all() and t["event"].isin([0, 1]).all(),
+                  "%s: survreg's check, every duration > 0 (R is not installed)" % csv.name)
+            tau = t["duration"].sum() / t["event"].sum()
+            check(np.isfinite(tau) and tau > 0, "%s: exponential fit tau %r" % (csv.name, tau))
+        print("survreg-ready: %s (%s)" % (csv.name, "R" if has_survival else "Python check"))
 
 print("%d failures" % len(failures))
 sys.exit(1 if failures else 0)
