@@ -313,8 +313,14 @@ def _missing(v):
 # ----- flow rate (Beverloo) and empty time versus D -------------------------------------------
 
 def plot_beverloo(st, width):
+    """The mass flow rate against D with each group's Beverloo fit (solid lines), and the empty
+    time (points joined by dotted lines, a guide for the eye: no fit). "Beverloo fit" is in the
+    key only where a fit is drawn (a group needs 3 outlets)."""
+    fits = {g: st.fit_row("beverloo", g) if st.s.has_analysis else None for g in st.groups}
+    fits = {g: f for g, f in fits.items() if f is not None and not _missing(f.get("C"))}
     fig, (ax_w, ax_e) = layout(st, 2, width, panel_h=2.3,
-                               legend_rows=legend_rows(list(st.groups) + ["Beverloo fit"], width))
+                               legend_rows=legend_rows(list(st.groups)
+                                                       + (["Beverloo fit"] if fits else []), width))
     handles, labels = [], []
     real = st.s.realizations
     for g, rows in st.groups.items():
@@ -331,11 +337,11 @@ def plot_beverloo(st, width):
         ok = np.isfinite(W)
         ax_w.errorbar(D[ok], W[ok] * 1e3, yerr=We[ok] * 1e3, fmt=m, color=c, capsize=2, ms=3)
         ok = np.isfinite(E)
-        ax_e.errorbar(D[ok], E[ok], yerr=Ee[ok], fmt=m + "-", color=c, capsize=2, ms=3, lw=0.8)
+        ax_e.errorbar(D[ok], E[ok], yerr=Ee[ok], fmt=m + ":", color=c, capsize=2, ms=3, lw=0.8)
         handles.append(plt.Line2D([], [], color=c, marker=m, ls="none", ms=3))
         labels.append(g or "all points")
-        fit = st.fit_row("beverloo", g) if st.s.has_analysis else None
-        if fit is not None and not _missing(fit.get("C")) and len(D):
+        fit = fits.get(g)
+        if fit is not None and len(D):
             C, k, rho_b, d = fit["C"], fit["k"], fit["rho_b"], fit["d"]
             lo = max(k * d * 100 * 1.001, 0.0)
             DD = np.linspace(lo, D.max() * 1.05, 200)
@@ -348,8 +354,9 @@ def plot_beverloo(st, width):
     ax_e.set_xlabel("D (cm)")
     ax_e.set_ylabel("empty time (s)")
     ax_e.set_ylim(bottom=0)
-    handles.append(plt.Line2D([], [], color="0.3", lw=0.9))
-    labels.append("Beverloo fit")
+    if fits:
+        handles.append(plt.Line2D([], [], color="0.3", lw=0.9))
+        labels.append("Beverloo fit")
     shared_legend(fig, handles, labels, width)
     return fig
 
@@ -389,6 +396,12 @@ def plot_k_theta(st, width):
                 if len(ths) <= 4 else "no fit for %d angles (< 3 outlets)" % len(ths),
                 transform=ax.transAxes, ha="center", va="bottom" if series else "center",
                 fontsize=7, color="0.35")
+    # the angles' range, at least 20 degrees wide (one angle: 0-1 deg was matplotlib's default)
+    angles = [t for pts in series.values() for t, _, _ in pts] + missing
+    if angles:
+        lo, hi = min(angles), max(angles)
+        pad = max(5.0, (20.0 - (hi - lo)) / 2)
+        ax.set_xlim(max(0.0, lo - pad), min(90.0, hi + pad))
     ax.set_xlabel(r"wall angle $\theta$ (deg)")
     ax.set_ylabel("Beverloo k")
     if n_legend:

@@ -13,6 +13,7 @@ outlet without jams, one with a single jam, avalanche sizes and arches of 5, 6, 
 - `nothing_to_draw` not refusing a store whose realizations all failed.
 usage: test_figure_files.py SOURCE_DIR"""
 import io
+import pathlib
 import re
 import shutil
 import subprocess
@@ -252,6 +253,36 @@ if shutil.which("pdffonts"):
             print(out)
             check("Type 3" not in out and "TrueType" in out,
                   "pdffonts %s.pdf:\n%s" % (name, out))
+
+# issue 43, item 4: the Beverloo figure's key names a fit only where one is drawn, the empty
+# times are not joined with the fit's solid line, and k_theta of one angle shows that angle
+# (matplotlib's default axis was 0-1 deg). Two outlets at one angle: no fit.
+def beverloo_checks(st, tag, with_fit):
+    with plt.rc_context(plots.STYLE):
+        fig = plots.plot_beverloo(plots.Study(st), plots.WIDTHS["column"])
+    texts = [t.get_text() for lg in fig.legends + [a.get_legend() for a in fig.axes if
+             a.get_legend()] for t in lg.get_texts()]
+    check(("Beverloo fit" in texts) == with_fit,
+          "%s: 'Beverloo fit' in the key %s, a fit drawn: %s" % (tag, texts, with_fit))
+    ax_e = fig.axes[1]
+    solid = [ln for ln in ax_e.lines if len(ln.get_xdata()) > 1 and ln.get_linestyle() == "-"]
+    check(not solid, "%s: empty times joined with the fit's solid line" % tag)
+    plt.close(fig)
+
+
+with tempfile.TemporaryDirectory() as d:
+    two = pathlib.Path(d) / "two.toml"
+    two.write_text('[hopper]\nwidth_cm = 12\nparticles = 500\n[campaign]\nname = "two"\n'
+                   'realizations = 3\n[sweep]\nD_cm = [2.5, 3.0]\ntheta_deg = [45]\n')
+    small = synthetic.make_store(two)
+check(small.beverloo["C"].isna().all(), "the two-outlet store has no Beverloo fit")
+beverloo_checks(small, "two outlets", False)
+beverloo_checks(store, "survival study", True)
+with plt.rc_context(plots.STYLE):
+    fig = plots.plot_k_theta(plots.Study(small), plots.WIDTHS["column"])
+lo, hi = fig.axes[0].get_xlim()
+check(lo < 45 < hi and hi - lo >= 10, "k_theta of one angle (45): x axis %g-%g deg" % (lo, hi))
+plt.close(fig)
 
 # a store whose realizations all failed: nothing to draw, said so
 failed = synthetic.make_store(src / "campaigns" / "paper" / "survival.toml")
