@@ -28,7 +28,10 @@ Reading needs Debian's python3-h5py, -numpy and -pandas; fields() also python3-x
 reads a snapshot of it taken from its journal, which holds every realization stored at that
 moment (docs/store.md, "Reading a store during a run"): it runs `campaign export STORE
 --snapshot` with the executable named by $HOPPER_CAMPAIGN, else `campaign` on PATH, else the
-source tree's build/src/cli/campaign. The snapshot is removed by close().
+source tree's build/src/cli/campaign. Such a Store is a snapshot: realizations stored after
+open_store() returned are not in it (open it again to see them; `s.snapshot` says whether it is
+one). The snapshot's temporary directory is removed by close(), by the end of a `with` block, or
+when the Store is garbage-collected, without a ResourceWarning.
 """
 import contextlib
 import fcntl
@@ -38,6 +41,7 @@ import shutil
 import struct
 import subprocess
 import tempfile
+import weakref
 
 import h5py
 import numpy as np
@@ -202,6 +206,12 @@ class Store:
         if snapshot is not None:
             snapshot.cleanup()
             self._snapshot_dir = None
+
+    @property
+    def snapshot(self):
+        """Whether this Store reads a snapshot of the journal taken by open_store() (the store
+        was being written, or not in step): later realizations are not in it."""
+        return getattr(self, "_is_snapshot", False)
 
     def __enter__(self):
         return self
@@ -670,18 +680,19 @@ def campaign_executable():
 
 
 def _snapshot(path):
-    """A snapshot of the store's journal in a new temporary directory: (directory, file)."""
+    """A snapshot of the store's journal in a new temporary directory: (directory, file). The
+    caller removes the directory (readable() at the end of its block, a Store at close())."""
     exe = campaign_executable()
     if exe is None:
         raise OSError("'%s' is being written by a `campaign run` (or its last run was "
                       "interrupted): reading it then needs the `campaign` executable to take a "
                       "snapshot of its journal; set HOPPER_CAMPAIGN or put it on PATH" % path)
-    tmp = tempfile.TemporaryDirectory(prefix="hopper-view-")
-    view = os.path.join(tmp.name, os.path.basename(path))
+    tmp = tempfile.mkdtemp(prefix="hopper-view-")
+    view = os.path.join(tmp, os.path.basename(path))
     done = subprocess.run([exe, "export", path, "--snapshot", view], capture_output=True,
                           text=True)
     if done.returncode != 0:
-        tmp.cleanup()
+        shutil.rmtree(tmp, ignore_errors=True)
         raise OSError("cannot take a snapshot of '%s': %s" % (path, done.stderr.strip()))
     return tmp, view
 
@@ -703,18 +714,47 @@ def readable(path):
     try:
         yield view
     finally:
-        tmp.cleanup()
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _remove_snapshot(h5file, directory):
+    """Closes the snapshot's HDF5 file and removes its directory (a Store's finalizer: it holds
+    no reference to the Store)."""
+    try:
+        h5file.close()
+    except Exception:  # noqa: BLE001 - already closed, or h5py shutting down
+        pass
+    shutil.rmtree(directory, ignore_errors=True)
+
+
+class _SnapshotDir:
+    """The snapshot's directory, removed once by cleanup() or when its Store is collected."""
+
+    def __init__(self, store, directory):
+        self.name = directory
+        self._finalizer = weakref.finalize(store, _remove_snapshot, store._f, directory)
+
+    def cleanup(self):
+        self._finalizer()
 
 
 def open_store(path):
     """Opens a store for reading (see the module's help). During a run (or after a killed one,
     before the next run repairs the file) it reads a snapshot of the journal instead of the
-    HDF5 file, which the writer holds and which lags behind the journal."""
+    HDF5 file, which the writer holds and which lags behind the journal: the Store then holds
+    the realizations stored when open_store() was called, not those stored later (open it again
+    for them), and `snapshot` is True. Close it (or use `with`) to remove the snapshot's
+    temporary directory at once; otherwise it goes when the Store is garbage-collected."""
     path = str(path)
     if not _needs_snapshot(path):
         return Store(path)
     tmp, view = _snapshot(path)
-    s = Store(view)
+    try:
+        s = Store(view)
+    except Exception:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
     s.path = path
-    s._snapshot_dir = tmp
+    s._snapshot_dir = _SnapshotDir(s, tmp)
+    s._is_snapshot = True
     return s

@@ -2,7 +2,7 @@
 """Figures of a campaign store for papers (`campaign plot` calls this; after `campaign analyze`,
 which `campaign run` does at its end).
 
-usage: /usr/bin/python3 analysis/plots.py STORE.h5 --out DIR [--format png,pdf,svg]
+usage: /usr/bin/python3 analysis/plots.py STORE.h5 [--out DIR] [--format png,pdf,svg]
            [--width column|page]
            [--compare LABEL_A LABEL_B [--field vx|vy|speed|pressure] [--compare-out PATH]]
 
@@ -804,10 +804,17 @@ def figures(store, width=WIDTHS["page"]):
             yield "fields_" + file_part(label), plot_field_point(st, PointFields(label, ds), width)
 
 
+def default_out(store):
+    """`campaign plot`'s default directory: the store's path without .h5, plus _plots."""
+    root, ext = os.path.splitext(store)
+    return (root if ext else store) + "_plots"
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Figures of a campaign store (after analyze).")
     ap.add_argument("store", help="the store (STORE.h5)")
-    ap.add_argument("--out", required=True, help="directory for the figures")
+    ap.add_argument("--out", help="directory for the figures (default: STORE without .h5, plus "
+                    "_plots, as `campaign plot`)")
     ap.add_argument("--format", default="png",
                     help="comma-separated: png, pdf, svg (default png)")
     ap.add_argument("--width", default="page", choices=sorted(WIDTHS),
@@ -826,6 +833,8 @@ def main(argv=None):
         fail("unknown format '%s' (allowed: %s)" % (bad[0], ", ".join(FORMATS)))
     if not os.path.exists(args.store):
         fail("no store at '%s'" % args.store)
+    if args.out is None:
+        args.out = default_out(args.store)
     try:
         store = open_store(args.store)
     except (OSError, ValueError) as e:

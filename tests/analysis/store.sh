@@ -17,7 +17,8 @@ expect_in run.out "figures (campaign plot $STORE --out $WORK/mf_plots):"
 expect_in run.out "$WORK/mf_plots/survival.png"
 [ -s "$WORK/mf_plots/jam_rate.png" ] || fail "campaign run did not draw jam_rate.png"
 run_expect 0 export "$EXE" export "$STORE" --csv "$WORK/csv" --vtk "$WORK/vtk"
-"$PY" "$SRC/tests/analysis/test_hopper_store.py" "$SRC" "$STORE" "$WORK/csv" || fail "test_hopper_store.py"
+HOPPER_CAMPAIGN="$EXE" "$PY" "$SRC/tests/analysis/test_hopper_store.py" "$SRC" "$STORE" "$WORK/csv" ||
+    fail "test_hopper_store.py"
 [ "$(ls "$WORK"/vtk/*.vti | wc -l)" -eq 6 ] || fail "export --vtk wrote $(ls "$WORK"/vtk | wc -l) files, not 6"
 
 run_expect 0 plot "$EXE" plot "$STORE" --out "$WORK/plots" --format png,pdf,svg
@@ -26,6 +27,11 @@ for fig in survival jam_rate beverloo k_theta in_hopper jam_onsets; do
         [ -s "$WORK/plots/$fig.$fmt" ] || fail "campaign plot did not write $fig.$fmt"
     done
 done
+# plots.py (hopper-plot) without --out draws where `campaign plot` does: STORE_plots (issue 43)
+rm -rf "$WORK/mf_plots"
+run_expect 0 hopper_plot "$PY" "$SRC/analysis/plots.py" "$STORE"
+expect_in hopper_plot.out "$WORK/mf_plots/survival.png"
+[ -s "$WORK/mf_plots/survival.png" ] || fail "plots.py without --out did not write mf_plots/survival.png"
 head -c 4 "$WORK/plots/survival.pdf" | grep -q '%PDF' || fail "survival.pdf is not a PDF"
 "$PY" - "$SRC" "$STORE" <<'PYEOF' || fail "figures of the real store have layout problems"
 import sys

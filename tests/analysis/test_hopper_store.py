@@ -217,5 +217,40 @@ with tempfile.TemporaryDirectory() as tmp:
             check(np.isfinite(tau) and tau > 0, "%s: exponential fit tau %r" % (csv.name, tau))
         print("survreg-ready: %s (%s)" % (csv.name, "R" if has_survival else "Python check"))
 
+# open_store() of a store that is not in step (as during a run) reads a snapshot (issue 43, item
+# 10): it says so, holds what was stored, and its temporary directory goes without a
+# ResourceWarning when the Store is dropped unclosed, and at once on close()
+import gc  # noqa: E402
+import warnings  # noqa: E402
+
+with tempfile.TemporaryDirectory() as tmp:
+    copy = pathlib.Path(tmp) / "busy.h5"
+    shutil.copy(store_path, copy)
+    shutil.copy(store_path + ".journal", str(copy) + ".journal")
+    with h5py.File(copy, "r+") as g:
+        g.attrs["consistent"] = 0  # what a killed or running writer leaves
+    import hopper_store  # noqa: E402
+    check("snapshot" in (hopper_store.open_store.__doc__ or ""),
+          "open_store's docstring says it reads a snapshot")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        z = open_store(copy)
+        view = pathlib.Path(z._f.filename).parent
+        check(z.snapshot and view.is_dir() and len(z.realizations) == 12,
+              "a snapshot with 12 realizations in %s" % view)
+        del z
+        gc.collect()
+        check(not view.exists(), "the dropped snapshot's directory %s is removed" % view)
+        z = open_store(copy)
+        view = pathlib.Path(z._f.filename).parent
+        z.close()
+        check(not view.exists() and z.snapshot, "close() removes the snapshot's directory")
+        del z
+        gc.collect()
+    warned = [str(w.message) for w in seen if issubclass(w.category, ResourceWarning)]
+    check(not warned, "ResourceWarning: %s" % warned)
+    with open_store(store_path) as plain:
+        check(not plain.snapshot, "a store in step is read as it stands")
+
 print("%d failures" % len(failures))
 sys.exit(1 if failures else 0)
