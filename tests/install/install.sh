@@ -5,8 +5,10 @@
 #   CITATION.cff under P;
 # - the installed campaign names the release (project() of CMakeLists.txt) and runs the
 #   installed analysis scripts, not the source tree's;
-# - a project outside hopper (tests/install/consumer) finds it with find_package(hopper 0.4),
-#   links hopper::engine and runs one tiny realization;
+# - the C++ example of the docs (docs/examples/cpp, a project outside hopper) finds it with
+#   find_package(hopper 0.4), links hopper::engine and runs one tiny realization; the README's
+#   own find_package line is accepted by the installed version file, and it names the release's
+#   major.minor, as the example does;
 # - `pip install ./analysis` into a venv made with --system-site-packages (Debian's numpy,
 #   pandas, h5py, matplotlib; setuptools and wheel from Debian, no network) gives the package
 #   hopper_analysis and the hopper-plot command.
@@ -40,13 +42,25 @@ expect_in plot.out "installed plots.py"
 expect_in plot.err "every realization of"
 expect_in plot.err "nothing to draw"
 
-# an outside project: find_package(hopper), hopper::engine, one realization
-run_expect 0 consumer_cmake cmake -S "$SRC/tests/install/consumer" -B "$WORK/consumer" \
+# an outside project, the docs' example: find_package(hopper), hopper::engine, one realization
+run_expect 0 consumer_cmake cmake -S "$SRC/docs/examples/cpp" -B "$WORK/consumer" \
     -DCMAKE_PREFIX_PATH="$P" -DCMAKE_BUILD_TYPE=Release
 run_expect 0 consumer_build cmake --build "$WORK/consumer"
 run_expect 0 consumer_run "$WORK/consumer/one_realization"
 expect_in consumer_run.out "status "
 expect_in consumer_run.out " particles 60 "
+# the README's find_package line, as written, against this release (issue 43: it said 0.3, which
+# the version file of 0.4.0 refuses)
+readme_line=$(grep -o 'find_package(hopper [0-9.]* REQUIRED)' "$SRC/README.md" | head -1)
+[ -n "$readme_line" ] || fail "README.md has no find_package(hopper X.Y REQUIRED) line"
+example_line=$(grep -o 'find_package(hopper [0-9.]* REQUIRED)' "$SRC/docs/examples/cpp/CMakeLists.txt")
+[ "$readme_line" = "$example_line" ] || fail "README: '$readme_line', docs/examples/cpp: '$example_line'"
+[ "$readme_line" = "find_package(hopper ${RELEASE%.*} REQUIRED)" ] ||
+    fail "README's '$readme_line' does not name release ${RELEASE%.*}"
+mkdir -p "$WORK/readme_line"
+printf 'cmake_minimum_required(VERSION 3.25)\nproject(t LANGUAGES CXX)\n%s\n' "$readme_line" \
+    >"$WORK/readme_line/CMakeLists.txt"
+run_expect 0 readme_line cmake -S "$WORK/readme_line" -B "$WORK/readme_line/build" -DCMAKE_PREFIX_PATH="$P"
 # a release it does not have is refused by the version file
 mkdir -p "$WORK/too_new"
 printf 'cmake_minimum_required(VERSION 3.25)\nproject(t LANGUAGES CXX)\nfind_package(hopper 9.0 REQUIRED)\n' \

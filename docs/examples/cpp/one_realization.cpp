@@ -1,5 +1,6 @@
-// One tiny realization through the installed engine library (hopper::engine): 60 disks in an
-// 8 cm hopper, a second of simulated time. Prints its status and jams; exit 0 when it ran.
+// The docs' C++ example (README, "Install and cite"): one tiny realization through the installed
+// engine library (hopper::engine), 60 disks in an 8 cm hopper, a second of simulated time. Prints
+// its status and jams; exit 0 when it ran. tests/install/install.sh builds and runs it.
 #include <iostream>
 
 #include "hopper/core/units.hpp"
