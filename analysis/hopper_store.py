@@ -43,9 +43,19 @@ import subprocess
 import tempfile
 import weakref
 
-import h5py
-import numpy as np
-import pandas as pd
+import sys
+
+try:
+    import h5py
+    import numpy as np
+    import pandas as pd
+except ImportError as missing:  # another python3 first on PATH (conda, pyenv, a bare venv)
+    raise ImportError(
+        "hopper_store needs h5py, numpy and pandas, which this Python (%s) cannot import (%s). "
+        "Use Debian's /usr/bin/python3 (./install-deps.sh installs python3-h5py, -numpy, "
+        "-pandas), e.g. `/usr/bin/python3 script.py`, or a venv made from it: "
+        "/usr/bin/python3 -m venv --system-site-packages ENV (README, \"Install and cite\")"
+        % (sys.executable, missing), name=getattr(missing, "name", None)) from missing
 
 __all__ = ["open_store", "readable", "writer_active", "Store", "parse_scene", "SETTING_INFO", "setting_text", "varied_settings", "positive_durations"]
 
