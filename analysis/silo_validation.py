@@ -49,6 +49,40 @@ from hopper_store import open_store  # noqa: E402
 MIN_CLOGS_FIT = 5      # an outlet enters the fits with this many clogs or more
 R_C_SCAN_SPAN = 50.0   # the critical fit scans R_c up to this far (D/d) beyond the largest outlet
 
+# The experiments of the 2-D silo (arch removal) as compared by Goldberg, Carlevaro and Pugnaloni
+# (J. Stat. Mech. (2018) 113201, Fig. 3a): ln(<s>+1) per D/d, read off that figure (+-0.3; issue
+# 39). The band the model is held to: from the lower to the higher of the two at each outlet,
+# widened by BAND_MARGIN on each side (one experiment alone at D/d 3).
+EXPERIMENTS = {
+    "Janda et al. 2008": {3.0: 3.9, 3.5: 5.1, 4.0: 6.4, 4.5: 8.0, 5.0: 9.7},
+    "To 2005": {3.5: 4.2, 4.0: 5.4, 4.5: 6.3, 5.0: 7.8},
+}
+BAND_MARGIN = 0.5
+
+
+def band(D_over_d):
+    """(lo, hi) of the experimental band at this outlet (within 0.01 of a tabulated D/d), or
+    None where no experiment was read."""
+    vals = [v for tab in EXPERIMENTS.values() for k, v in tab.items() if abs(k - D_over_d) < 0.01]
+    if not vals:
+        return None
+    return min(vals) - BAND_MARGIN, max(vals) + BAND_MARGIN
+
+
+def band_check(rows):
+    """Per row with clogs and an experimental band at its outlet: ln(<s>+1), the band, and
+    whether it lies inside; plus whether every such row does."""
+    out = []
+    for r in rows:
+        b = band(r["D_over_d"])
+        if b is None or not r["clogs"] or r["mean_s"] is None:
+            continue
+        y = math.log(r["mean_s"] + 1)
+        out.append({"D_over_d": r["D_over_d"], "y": y, "lo": b[0], "hi": b[1],
+                    "inside": b[0] <= y <= b[1]})
+    return {"rows": out, "all_inside": bool(out) and all(x["inside"] for x in out)}
+
+
 plt.rcParams.update({"pdf.fonttype": 42, "ps.fonttype": 42, "svg.hashsalt": "hopper"})
 
 
@@ -271,6 +305,7 @@ def main():
             sys.exit("silo_validation.py: no such store: %s" % p)
     result = {"remove_arch": summarize(args.remove_arch, skip_first=not args.keep_first)}
     result["fit_remove_arch"] = fit(result["remove_arch"])
+    result["band_remove_arch"] = band_check(result["remove_arch"])
     if args.refill:
         result["refill"] = summarize(args.refill)
         result["protocol_effect"] = protocol_effect(result["remove_arch"], result["refill"])
@@ -294,6 +329,13 @@ def main():
                                        if c["R_c_at_scan_edge"] else "",
                                        c["gamma"], c["chi2"], c["chi2_exponential"],
                                        c["aic_critical_minus_exponential"], c["verdict"]))
+    bc = result["band_remove_arch"]
+    if bc["rows"]:
+        md += ("\nAgainst the experiments (Janda et al. 2008 and To 2005 as read off Goldberg et al."
+               " 2018, Fig. 3a, the band widened by %.1f): %s\n" % (BAND_MARGIN, "; ".join(
+                   "D/d %.1f: %.2f in [%.1f, %.1f] %s" % (x["D_over_d"], x["y"], x["lo"], x["hi"],
+                                                         "inside" if x["inside"] else "OUTSIDE")
+                   for x in bc["rows"])))
     if args.refill:
         md += "\n" + table("Refill after each clog", result["refill"])
         md += "\n" + effect_table(result["protocol_effect"])
@@ -337,6 +379,14 @@ def main():
             ax.plot(xx, c["ln_A"] - c["gamma"] * np.log(c["R_c"] - R), "--", color="grey",
                     label="ln A - $\\gamma$ ln(R$_c$ - D/d): %s" % (
                         "no finite R$_c$" if c["R_c_at_scan_edge"] else "R$_c$ = %.3g" % c["R_c"]))
+    # The experiments and their band (issue 39)
+    grid = sorted({k for tab in EXPERIMENTS.values() for k in tab})
+    ax.fill_between([k * k for k in grid], [band(k)[0] for k in grid], [band(k)[1] for k in grid],
+                    color="C2", alpha=0.15, lw=0,
+                    label="experiments $\\pm$ %.1f (Goldberg et al. 2018, Fig. 3a)" % BAND_MARGIN)
+    for (name, tab), m in zip(EXPERIMENTS.items(), ("v", "D")):
+        ax.plot([k * k for k in tab], list(tab.values()), m, color="C2", ms=4, mfc="none",
+                label=name)
     ax.set_xlabel("(D/d)$^2$")
     ax.set_ylabel("ln(<s> + 1)")
     ax.legend(fontsize=7)

@@ -183,4 +183,17 @@ check(silo_validation.critical_fit(np.array(Rs[:3]), np.zeros(3), np.ones(3), 0.
 check(silo_validation.fit([r for r in res if r["D_over_d"] != 4.5]) is None,
       "no fit over two outlets")
 
+# The experimental band (issue 39): at D/d 3.5 Janda 5.1 and To 4.2 -> [3.7, 5.6]; at 3.0 Janda
+# alone -> [3.4, 4.4]; at 2.0 none. ln(<s>+1) = ln 100 = 4.61 is inside at 3.5, outside at 3.0.
+check(silo_validation.band(3.5) == (4.2 - 0.5, 5.1 + 0.5), "band at 3.5: %r" % (silo_validation.band(3.5),))
+check(silo_validation.band(3.0) == (3.9 - 0.5, 3.9 + 0.5), "band at 3.0")
+check(silo_validation.band(2.0) is None, "no band at 2.0")
+bc = silo_validation.band_check([{"D_over_d": 3.5, "clogs": 10, "mean_s": 99.0},
+                                 {"D_over_d": 3.0, "clogs": 10, "mean_s": 99.0},
+                                 {"D_over_d": 2.0, "clogs": 10, "mean_s": 99.0},
+                                 {"D_over_d": 4.0, "clogs": 0, "mean_s": None}])
+check([x["inside"] for x in bc["rows"]] == [True, False] and not bc["all_inside"],
+      "band_check: %r" % bc)
+check(silo_validation.band_check([{"D_over_d": 3.5, "clogs": 10, "mean_s": 99.0}])["all_inside"],
+      "all inside")
 check.finish()
