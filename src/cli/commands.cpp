@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli/analyze.hpp"
+#include "cli/cite.hpp"
 #include "cli/exit_codes.hpp"
 #include "cli/python_tools.hpp"
 #include "cli/run.hpp"
@@ -39,6 +40,8 @@ constexpr Command table[] = {
      print_simulate_help, without_line<simulate_command>},
     {"submit", "submit a campaign to Slurm; it drains before the limit and resubmits itself",
      print_submit_help, without_line<submit_command>},
+    {"cite", "the references for what a store used (models, methods), plain text and BibTeX",
+     print_cite_help, without_line<cite_command>},
 };
 
 const Command* find(std::string_view name) {

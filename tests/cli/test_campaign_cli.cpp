@@ -297,7 +297,7 @@ TEST(CampaignCli, EveryListedCommandHasHelpAndRuns) {
         names.push_back(name);
     }
     EXPECT_EQ(names, (std::vector<std::string>{"run", "status", "analyze", "plot", "export",
-                                               "simulate", "submit"}));
+                                               "simulate", "submit", "cite"}));
     for (const auto& name : names) {
         const Outcome h = campaign("help " + name);
         EXPECT_EQ(h.code, 0) << name << "\n" << h.err;
@@ -310,6 +310,36 @@ TEST(CampaignCli, EveryListedCommandHasHelpAndRuns) {
          {"  0  success", "  1  unexpected or store error", "  2  bad command line or sweep file",
           "  3  realization(s) failed", "  4  stopped by a signal (run; resumable)"})
         EXPECT_NE(help.out.find(code), std::string::npos) << code << "\n" << help.out;
+}
+
+// `campaign cite STORE` (issue 43): the references for what a real store used, from its
+// journal: the published study, the store's integrator (tiny.toml: gear4) and not the others.
+TEST(CampaignCli, CiteListsWhatTheStoreUsed) {
+    const fs::path dir = scratch();
+    const fs::path sweep = dir / "one.toml", store = dir / "one.h5";
+    fs::remove(store);
+    fs::remove(fs::path(store.string() + ".journal"));
+    std::string text = slurp(tiny);
+    text = std::regex_replace(text, std::regex("realizations = 2"), "realizations = 1");
+    text = std::regex_replace(text, std::regex(R"(D_cm = \[3.0, 4.5\])"), "D_cm = [4.5]");
+    std::ofstream(sweep) << text;
+    const Outcome run = campaign("run " + quote(sweep) + " --store " + quote(store) +
+                                 " --progress-interval 0 --no-plots");
+    ASSERT_EQ(run.code, 0) << run.err;
+    const Outcome all = campaign("cite " + quote(store));
+    ASSERT_EQ(all.code, 0) << all.err;
+    for (const char* want : {"[kondic2014] Lou Kondic", "[tang2011]", "[gear1971]", "[hopper]",
+                             "version 0.4", "@article{kondic2014,", "@book{gear1971,"})
+        EXPECT_NE(all.out.find(want), std::string::npos) << want << "\n" << all.out;
+    for (const char* not_used : {"swope1982", "hertz1882", "welford1962"})
+        EXPECT_EQ(all.out.find(not_used), std::string::npos) << not_used;
+    const Outcome bib = campaign("cite " + quote(store) + " --bibtex");
+    EXPECT_EQ(bib.code, 0);
+    EXPECT_EQ(bib.out.rfind("@misc{hopper,", 0), 0u) << bib.out;
+    EXPECT_EQ(bib.out.find("[kondic2014]"), std::string::npos);
+    EXPECT_EQ(campaign("cite " + quote(store) + " --bibtex --text").code, 2);
+    const Outcome none = campaign("cite " + quote(dir / "none.h5"));
+    EXPECT_EQ(none.code, 1) << none.err;
 }
 
 TEST(CampaignCli, SnapshotsWriteDumpFrames) {
