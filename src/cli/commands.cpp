@@ -6,6 +6,7 @@
 #include "cli/analyze.hpp"
 #include "cli/cite.hpp"
 #include "cli/exit_codes.hpp"
+#include "cli/merge.hpp"
 #include "cli/python_tools.hpp"
 #include "cli/run.hpp"
 #include "cli/simulate.hpp"
@@ -42,6 +43,8 @@ constexpr Command table[] = {
      print_submit_help, without_line<submit_command>},
     {"cite", "the references for what a store used (models, methods), plain text and BibTeX",
      print_cite_help, without_line<cite_command>},
+    {"merge", "join stores of one campaign (split points, copies resumed elsewhere) into one",
+     print_merge_help, merge_command},
 };
 
 const Command* find(std::string_view name) {

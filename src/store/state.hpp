@@ -81,4 +81,13 @@ struct ReplaySink {
 void apply_record(State& state, RecordType type, std::uint64_t offset,
                   std::span<const std::uint8_t> payload, ReplaySink* sink);
 
+// The HDF5 file `target` written from the journal's records before `limit` (truncates it), then
+// closed as in step with `token` and `journal_bytes` (the rebuild, the snapshot and the merge).
+void write_from_journal(const std::filesystem::path& jpath, std::uint64_t limit,
+                        const std::filesystem::path& target, const std::string& journal_name,
+                        std::uint64_t token, std::uint64_t journal_bytes,
+                        const PointParameters& parameters);
+// A random nonzero token naming an HDF5 file closed in step (its sync record holds it).
+std::uint64_t random_token();
+
 }  // namespace hopper::store

@@ -73,8 +73,8 @@ struct RebuildSink : ReplaySink {
     void allotment(const State& s, bool changed) override { w.allotment(s, changed); }
 };
 
-// The HDF5 file `target` written from the journal's records before `limit` (truncates it), then
-// closed as in step with `token` and `journal_bytes` (the rebuild and the snapshot).
+}  // namespace
+
 void write_from_journal(const fs::path& jpath, std::uint64_t limit, const fs::path& target,
                         const std::string& journal_name, std::uint64_t token,
                         std::uint64_t journal_bytes, const PointParameters& parameters) {
@@ -92,8 +92,6 @@ std::uint64_t random_token() {
     std::random_device rd;
     return (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ 1u;
 }
-
-}  // namespace
 
 struct Store::Impl {
     // HDF5 prints no error stacks while a Store lives (its failures are exceptions); first, so

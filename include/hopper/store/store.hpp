@@ -152,6 +152,34 @@ using PointParameters = std::function<std::vector<DerivedDataset>(
 Snapshot write_snapshot(const std::filesystem::path& store, const std::filesystem::path& out,
                         const PointParameters& point_parameters = {});
 
+// `campaign merge` (docs/store.md, "Merging stores"): the stores of one campaign joined into a new
+// store `out` with its journal. Inputs are read only (their journals, as a snapshot does) and
+// refused (core::ConfigError, naming the store and the problem; nothing is written) when a
+// `campaign run` holds one, when an input's HDF5 file disagrees with its journal, when campaign
+// names or seeds differ, when a point present in two inputs has other physics or seeds, and when
+// two copies of a realization differ (physics digest, seed or status). `out` and its journal must
+// not exist. The journal of `out` holds every run of the inputs once (a run shared by two inputs,
+// as in a copy resumed elsewhere, is the same run-start record), each with its records, each
+// realization once (the first input's copy, byte for byte), then a run of its own (`merge_run`,
+// no points, reason "merged ..."); its HDF5 file is written from it and closed in step.
+struct MergeInputSummary {
+    std::filesystem::path store;
+    std::int64_t realizations = 0;  // stored in that input
+    int runs = 0;
+    std::uint64_t torn_bytes = 0;  // an incomplete last record, left out (a killed run's)
+};
+struct MergeReport {
+    std::vector<MergeInputSummary> inputs;
+    std::int64_t realizations = 0;    // in the merged store
+    std::int64_t identical_copies = 0;  // copies of a realization found in another input too
+    int points = 0;
+    int runs = 0;         // input runs copied (shared ones once), the merge's own not counted
+    int shared_runs = 0;  // runs found in more than one input
+};
+MergeReport merge_stores(const std::vector<std::filesystem::path>& inputs,
+                         const std::filesystem::path& out, RunInfo merge_run,
+                         const PointParameters& point_parameters = {});
+
 struct StoreOptions {
     // Seconds between HDF5 flushes while running (0: after every result). The journal is
     // always synced per record; this only bounds how stale an interrupted HDF5 file may be.
