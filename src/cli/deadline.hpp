@@ -12,9 +12,12 @@ namespace hopper::cli {
 //   "slurm-120", "slurm-2m" the Slurm job's end time minus that much (the batch template: the
 //                           moment Slurm's warning signal is due, plus the grace)
 //   "@1767225600"           seconds since 1970
-//   "2026-11-24T15:00:00Z"  ISO 8601 UTC, or with a UTC offset: "2026-11-24T16:00:00+01:00";
-//                           a date that does not exist (2026-02-31) is refused
-//   "+3600", "+90m", "+2h", "+1:30:00"   from `now`
+//   "2026-11-24T15:00:00Z"  ISO 8601 UTC, or with a UTC offset: "2026-11-24T16:00:00+01:00" or
+//                           "+0100" (date +%FT%T%z); fractional seconds ("15:00:00.25Z");
+//                           without a zone, this machine's local time (TZ); a date that does
+//                           not exist (2026-02-31; locally, an hour skipped by daylight-saving
+//                           time) is refused
+//   "+3600", "+90m", "+2h", "+1.5d", "+1:30:00"   from `now` (s, m, h, d)
 // Throws core::ConfigError naming the value and the allowed forms; also for a number too large
 // or a deadline after 9999-12-31T23:59:59Z.
 std::optional<double> parse_deadline(const std::string& text, double now);

@@ -62,7 +62,8 @@ po::options_description run_options() {
          "are stopped (their states saved) at T minus --grace, and the run exits 4 (resumable). "
          "T: slurm (the job's end time; the default inside a Slurm job), slurm-S (S seconds "
          "before it), none, @SECONDS_SINCE_1970, "
-         "2026-11-24T15:00:00Z (UTC), or from now: +3600, +90m, +2h, +1:30:00")  //
+         "2026-11-24T15:00:00Z (UTC), 2026-11-24T16:00:00+0100 (date +%FT%T%z), "
+         "2026-11-24T16:00:00 (local time), or from now: +3600, +90m, +2h, +1d, +1:30:00")  //
         ("checkpoint-interval", po::value<std::string>()->value_name("S"),
          "seconds of wall time between checkpoints of each running realization, written beside "
          "the store in STORE.checkpoints/ (default 600; 0 = only when a realization is stopped)")  //
