@@ -248,6 +248,11 @@ TEST(CampaignCli, BadCommandLinesExitTwoNamingTheProblem) {
         {"frobnicate", {"unknown command 'frobnicate'", "simulate"}},
         {"run", {"missing the sweep file"}},
         {"help frobnicate", {"frobnicate"}},
+        // campaign merge (issue 43): its refusals are exit 2 (tests/campaign/merge.sh has more)
+        {"merge --store /nonexistent/c.h5", {"missing the stores to merge"}},
+        {"merge /nonexistent/a.h5", {"missing --store"}},
+        {"merge /nonexistent/a.h5 --store /nonexistent/c.h5",
+         {"merge refused", "no store at '/nonexistent/a.h5'", "nothing was written"}},
     };
     for (const auto& c : cases) {
         const Outcome r = campaign(c.args);
@@ -297,7 +302,7 @@ TEST(CampaignCli, EveryListedCommandHasHelpAndRuns) {
         names.push_back(name);
     }
     EXPECT_EQ(names, (std::vector<std::string>{"run", "status", "analyze", "plot", "export",
-                                               "simulate", "submit", "cite"}));
+                                               "simulate", "submit", "cite", "merge"}));
     for (const auto& name : names) {
         const Outcome h = campaign("help " + name);
         EXPECT_EQ(h.code, 0) << name << "\n" << h.err;
