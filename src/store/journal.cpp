@@ -348,6 +348,19 @@ Journal Journal::open(const fs::path& path, const RecordVisitor& visit, JournalS
 }
 
 std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> payload) {
+    return append_record(type, payload, true);
+}
+
+std::uint64_t Journal::append_unsynced(RecordType type, std::span<const std::uint8_t> payload) {
+    return append_record(type, payload, false);
+}
+
+void Journal::sync() {
+    if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+}
+
+std::uint64_t Journal::append_record(RecordType type, std::span<const std::uint8_t> payload,
+                                     bool sync) {
     if (payload.size() > max_payload)
         throw core::StoreError("a journal record of " + std::to_string(payload.size()) +
                                " bytes is too large");
@@ -367,7 +380,7 @@ std::uint64_t Journal::append(RecordType type, std::span<const std::uint8_t> pay
     const std::uint64_t at = size_;
     try {
         write_all(fd_, rec.data(), rec.size(), at, path_);
-        if (::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
+        if (sync && ::fdatasync(fd_) != 0) fail_errno("cannot sync the journal", path_);
     } catch (const core::StoreError& e) {
         // A full disk or a quota: take the partial record back (best effort; a torn tail is
         // dropped by the next run anyway) and say what it means.

@@ -7,6 +7,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <map>
 #include <set>
 #include <sstream>
@@ -268,26 +270,35 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
         own.plan.seed = inputs.front().state.plan.seed;
     }
 
+    // Written under names private to this merge (a kill leaves only them behind, never a
+    // store that looks complete), then put into place: the journal first (linked, so that a
+    // journal that appeared meanwhile is never replaced), then the HDF5 file.
+    const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+    const std::string tag = ".merge-" + std::to_string(::getpid());
+    fs::path jtmp = jout, htmp = out;
+    jtmp += tag;
+    htmp += tag;
     std::error_code ec;
-    fs::create_directories(out.parent_path().empty() ? fs::path(".") : out.parent_path(), ec);
-    bool created = false;
+    fs::create_directories(dir, ec);
+    bool created = false, placed = false;
     try {
-        Journal journal = Journal::create(jout);
+        Journal journal = Journal::create(jtmp);
         created = true;
         for (const Run& r : runs) {
-            journal.append(RecordType::run_start, *r.start);
+            journal.append_unsynced(RecordType::run_start, *r.start);
             for (const Record* rec : r.records)
-                journal.append(rec->type, rec->payload);
+                journal.append_unsynced(rec->type, rec->payload);
         }
-        journal.append(RecordType::run_start, encode(own));
+        journal.append_unsynced(RecordType::run_start, encode(own));
         RunEndRecord end;
         end.end_time = utc_now();
         end.reason = "merged " + std::to_string(inputs.size()) + " stores";
-        journal.append(RecordType::run_end, encode(end));
+        journal.append_unsynced(RecordType::run_end, encode(end));
+        journal.sync();
         // The merged journal replayed: what the HDF5 file is written from, and the check that
         // nothing was lost or duplicated.
         State state;
-        scan_journal(jout, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
+        scan_journal(jtmp, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
             apply_record(state, t, off, p, nullptr);
         });
         if (state.rows != static_cast<std::int64_t>(results.size()) || state.duplicates != 0)
@@ -296,18 +307,30 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
                                    std::to_string(results.size()));
         const std::uint64_t token = random_token();
         const std::uint64_t at = journal.size();
-        write_from_journal(jout, at, out, jout.filename().string(), token, at, point_parameters);
-        fsync_path(out);
+        write_from_journal(jtmp, at, htmp, jout.filename().string(), token, at, point_parameters);
+        fsync_path(htmp);
         journal.append(RecordType::sync,
                        encode(SyncRecord{token, at, static_cast<std::uint64_t>(state.rows),
-                                         checksum_file(out)}));
-        fsync_path(out.parent_path().empty() ? fs::path(".") : out.parent_path(), true);
+                                         checksum_file(htmp)}));
+        if (::link(jtmp.c_str(), jout.c_str()) != 0) {
+            const int err = errno;
+            if (err == EEXIST)
+                refuse(q(jout) + " appeared while the merge ran; it was left alone");
+            throw core::StoreError("cannot put the merged journal into place as " + q(jout) +
+                                   " (" + std::strerror(err) + ")");
+        }
+        placed = true;
+        fs::remove(jtmp);
+        if (present(out)) refuse(q(out) + " appeared while the merge ran; it was left alone");
+        fs::rename(htmp, out);
+        fsync_path(dir, true);
         report.realizations = state.rows;
         report.points = static_cast<int>(state.plan.points.size());
     } catch (...) {
         if (created) {
-            fs::remove(out, ec);
-            fs::remove(jout, ec);
+            fs::remove(htmp, ec);
+            fs::remove(jtmp, ec);
+            if (placed) fs::remove(jout, ec);
         }
         throw;
     }

@@ -90,6 +90,10 @@ class Journal {
     // at path() is no longer the one this handle writes (the journal was deleted or replaced
     // while the run wrote it): the record would be lost with the orphaned file.
     std::uint64_t append(RecordType type, std::span<const std::uint8_t> payload);
+    // The same without the fdatasync, for a journal written whole under a private name before it
+    // is put into place (campaign merge); sync() then makes it durable at once.
+    std::uint64_t append_unsynced(RecordType type, std::span<const std::uint8_t> payload);
+    void sync();
     std::uint64_t size() const { return size_; }
     const std::filesystem::path& path() const { return path_; }
     // False when the file system does not support locks and the options allowed that (then two
@@ -103,6 +107,7 @@ class Journal {
   private:
     Journal(std::filesystem::path path, int fd, std::uint64_t size, bool locked);
     void lock_or_throw(bool require_lock);
+    std::uint64_t append_record(RecordType type, std::span<const std::uint8_t> payload, bool sync);
     // Throws unless the file at path_ is the one fd_ refers to.
     void check_still_in_place() const;
 
