@@ -21,7 +21,7 @@ namespace {
 
 po::options_description merge_options() {
     po::options_description d("merge options");
-    d.add_options()                                                                   //
+    d.add_options()                                                                               //
         ("store", po::value<std::string>(), "the new store to write (required; must not exist)")  //
         ("help,h", "show this help");
     return d;
@@ -37,21 +37,23 @@ std::string hostname() {
 
 void print_merge_help(std::ostream& os) {
     os << "usage: campaign merge A.h5 B.h5 ... --store C.h5\n\n"
-          "Joins stores of one campaign into a new store C.h5 (with its journal): halves of a\n"
-          "sweep's points run on two machines, or a copy of a store resumed elsewhere. Every\n"
-          "realization is stored once, byte for byte as in the first input that has it; one found\n"
-          "in several inputs must be identical in each (seed, status, physics digest). Every run\n"
-          "of the inputs becomes a row of C's /runs once (a run two inputs share, as a copy resumed\n"
-          "elsewhere shares the runs before the copy, counts once), then one row for the merge.\n"
-          "`campaign run SWEEP --store C.h5` then resumes it and runs only what none of them had.\n\n"
-          "Refused (nothing written) when an input is being written by a `campaign run`, when an\n"
-          "input's HDF5 file disagrees with its journal, when the campaign names or seeds differ,\n"
-          "when a point in two inputs has other physics (the differing parameters are named), when\n"
-          "two copies of a realization differ, and when C.h5 or its journal exists (a merge never\n"
-          "overwrites: choose a new path). The inputs are only read, also when one was killed\n"
-          "mid-run (its journal holds what finished; the incomplete last record is left out).\n\n"
-          "exit codes: 0 merged, 1 unexpected or store error (I/O, a full disk; nothing is left\n"
-          "at C.h5), 2 bad command line or a merge refused (the message says why)\n\n"
+          "Joins stores of one campaign into a new store C.h5 (with its journal): halves of\n"
+          "a sweep's points run on two machines, or a copy of a store resumed elsewhere.\n"
+          "Every realization is stored once, byte for byte as in the first input that has\n"
+          "it; one found in several inputs must be identical in each (seed, status,\n"
+          "physics digest). Every run of the inputs becomes a row of C's /runs once (a run\n"
+          "two inputs share, as a copy resumed elsewhere shares the runs before the copy,\n"
+          "counts once), then one row for the merge. `campaign run SWEEP --store C.h5`\n"
+          "then resumes it and runs only what none of them had.\n\n"
+          "Refused (nothing written) when an input is being written by a `campaign run`,\n"
+          "when an input's HDF5 file disagrees with its journal, when the campaign names\n"
+          "or seeds differ, when a point in two inputs has other physics (the differing\n"
+          "parameters are named), when two copies of a realization differ, and when C.h5\n"
+          "or its journal exists (a merge never overwrites: choose a new path). The inputs\n"
+          "are only read, also when one was killed mid-run (its journal holds what\n"
+          "finished; the incomplete last record is left out).\n\n"
+          "exit codes: 0 merged, 1 unexpected or store error (I/O, a full disk; nothing is\n"
+          "left at C.h5), 2 bad command line or a merge refused (the message says why)\n\n"
        << merge_options();
 }
 
@@ -62,10 +64,9 @@ int merge_command(const std::vector<std::string>& args, const std::string& comma
         return 0;
     }
     if (!vm.count("inputs"))
-        throw core::ConfigError("missing the stores to merge (campaign merge A.h5 B.h5 ... "
-                                "--store C.h5)");
-    if (!vm.count("store"))
-        throw core::ConfigError("missing --store C.h5, the new store to write");
+        throw core::ConfigError(
+            "missing the stores to merge (campaign merge A.h5 B.h5 ... --store C.h5)");
+    if (!vm.count("store")) throw core::ConfigError("missing --store C.h5, the new store to write");
     std::vector<std::filesystem::path> inputs;
     for (const auto& s : vm["inputs"].as<std::vector<std::string>>())
         inputs.emplace_back(s);
@@ -91,10 +92,10 @@ int merge_command(const std::vector<std::string>& args, const std::string& comma
                       << " bytes left out: a killed run's)";
         std::cout << '\n';
     }
-    std::cout << "merged " << r.inputs.size() << " stores into " << out.string() << ": "
-              << r.points << " points, " << r.realizations << " realizations ("
-              << r.identical_copies << " identical copies stored once), " << r.runs
-              << " runs (" << r.shared_runs << " shared by several inputs, kept once)\n";
+    std::cout << "merged " << r.inputs.size() << " stores into " << out.string() << ": " << r.points
+              << " points, " << r.realizations << " realizations (" << r.identical_copies
+              << " identical copies stored once), " << r.runs << " runs (" << r.shared_runs
+              << " shared by several inputs, kept once)\n";
     return 0;
 }
 

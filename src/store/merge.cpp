@@ -44,7 +44,15 @@ struct Input {
 }
 
 std::string q(const fs::path& p) {
-    return "'" + p.string() + "'";
+    std::string s(1, '\'');
+    s += p.native();
+    s += '\'';
+    return s;
+}
+
+// A record's bytes as a key (runs and records are identified by their bytes).
+std::string key_of(const Bytes& b) {
+    return std::string(reinterpret_cast<const char*>(b.data()), b.size());
 }
 
 bool present(const fs::path& p) {
@@ -69,13 +77,15 @@ Input read_input(const fs::path& path) {
                "journal beside it)");
     }
     if (journal_locked(jpath))
-        refuse(q(path) + " is being written by a `campaign run` (its journal is locked); merge "
+        refuse(q(path) +
+               " is being written by a `campaign run` (its journal is locked); merge "
                "it once that run has ended or been stopped");
     try {
         const JournalScan scan = scan_journal(
             jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
                 apply_record(in.state, t, off, p, nullptr);
-                if (t != RecordType::sync) in.records.push_back(Record{t, Bytes(p.begin(), p.end())});
+                if (t != RecordType::sync)
+                    in.records.push_back(Record{t, Bytes(p.begin(), p.end())});
             });
         in.torn = scan.torn_bytes();
     } catch (const core::StoreError& e) {
@@ -118,8 +128,10 @@ std::string scene_difference(const std::string& a, const std::string& b, const f
                              const fs::path& pb) {
     const auto la = scene_lines(a), lb = scene_lines(b);
     std::set<std::string> names;
-    for (const auto& [k, v] : la) names.insert(k);
-    for (const auto& [k, v] : lb) names.insert(k);
+    for (const auto& [k, v] : la)
+        names.insert(k);
+    for (const auto& [k, v] : lb)
+        names.insert(k);
     std::string out;
     int shown = 0;
     for (const auto& n : names) {
@@ -150,8 +162,8 @@ void check_campaigns_agree(const std::vector<Input>& inputs) {
                    std::to_string(plan.seed) +
                    " (a merge joins stores of one campaign: the same [campaign] seed)");
         if (plan.name != first.state.plan.name)
-            refuse("the campaign names differ: " + q(first.path) + " is '" +
-                   first.state.plan.name + "', " + q(in.path) + " is '" + plan.name +
+            refuse("the campaign names differ: " + q(first.path) + " is '" + first.state.plan.name +
+                   "', " + q(in.path) + " is '" + plan.name +
                    "' (a merge joins stores of one campaign: the same [campaign] name)");
         for (const PointPlan& p : plan.points) {
             const auto [it, added] = points.emplace(p.label, Seen{&p, &in.path});
@@ -181,8 +193,8 @@ struct Copy {
 
 }  // namespace
 
-MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out,
-                         RunInfo merge_run, const PointParameters& point_parameters) {
+MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out, RunInfo merge_run,
+                         const PointParameters& point_parameters) {
     const h5::QuietErrors quiet;
     if (paths.empty()) refuse("no input stores (campaign merge A.h5 B.h5 ... --store C.h5)");
     const fs::path jout = journal_path(out);
@@ -206,8 +218,8 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
         int inputs = 0;
     };
     std::vector<Run> runs;
-    std::map<Bytes, std::size_t> run_of;
-    std::set<std::pair<RecordType, Bytes>> copied;  // errors, allotments, run ends: once each
+    std::map<std::string, std::size_t> run_of;
+    std::set<std::pair<RecordType, std::string>> copied;  // errors, allotments, run ends: once each
     std::map<std::pair<std::string, int>, Copy> results;
     for (std::size_t i = 0; i < inputs.size(); ++i) {
         Input& in = inputs[i];
@@ -218,7 +230,7 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
         std::set<std::size_t> runs_here;
         for (const Record& rec : in.records) {
             if (rec.type == RecordType::run_start) {
-                const auto [it, added] = run_of.emplace(rec.payload, runs.size());
+                const auto [it, added] = run_of.emplace(key_of(rec.payload), runs.size());
                 if (added) runs.push_back(Run{&rec.payload, {}, 0});
                 current = it->second;
                 if (runs_here.insert(*current).second) ++runs[*current].inputs;
@@ -251,7 +263,8 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
                 ++report.identical_copies;
                 continue;
             }
-            if (copied.emplace(rec.type, rec.payload).second) runs[*current].records.push_back(&rec);
+            if (copied.emplace(rec.type, key_of(rec.payload)).second)
+                runs[*current].records.push_back(&rec);
         }
     }
     for (const Run& r : runs)
@@ -314,10 +327,9 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
                                          checksum_file(htmp)}));
         if (::link(jtmp.c_str(), jout.c_str()) != 0) {
             const int err = errno;
-            if (err == EEXIST)
-                refuse(q(jout) + " appeared while the merge ran; it was left alone");
-            throw core::StoreError("cannot put the merged journal into place as " + q(jout) +
-                                   " (" + std::strerror(err) + ")");
+            if (err == EEXIST) refuse(q(jout) + " appeared while the merge ran; it was left alone");
+            throw core::StoreError("cannot put the merged journal into place as " + q(jout) + " (" +
+                                   std::strerror(err) + ")");
         }
         placed = true;
         fs::remove(jtmp);

@@ -66,10 +66,12 @@ std::string refusal(const std::function<void()>& f) {
 
 TEST(Merge, DisjointPointsGiveTheUnionRecordForRecord) {
     const fs::path dir = scratch();
-    const fs::path a = store_of(dir / "a.h5", {P}, {result_record(P, 0, fabricated(0)),
-                                                    result_record(P, 1, fabricated(1, false))});
-    const fs::path b = store_of(dir / "b.h5", {Q}, {result_record(Q, 0, fabricated(3)),
-                                                    result_record(Q, 1, fabricated(4))});
+    const fs::path a =
+        store_of(dir / "a.h5", {P},
+                 {result_record(P, 0, fabricated(0)), result_record(P, 1, fabricated(1, false))});
+    const fs::path b =
+        store_of(dir / "b.h5", {Q},
+                 {result_record(Q, 0, fabricated(3)), result_record(Q, 1, fabricated(4))});
     const MergeReport rep = merge_stores({a, b}, dir / "c.h5", merge_run());
     EXPECT_EQ(rep.realizations, 4);
     EXPECT_EQ(rep.identical_copies, 0);
