@@ -15,6 +15,16 @@ reference
 
 # count LINES_FILE: lines in it
 count() { wc -l <"$1" | tr -d ' '; }
+# lost_duplicated REF MERGED NAME: the reference's realizations missing from (or changed in) the
+# merged store's digests, and those the merged store holds more than once (store_digest already
+# fails on one in its journal or HDF5 file); both must be 0
+lost_duplicated() {
+    local lost dup
+    lost=$(comm -23 <(sort "$1") <(sort -u "$2") | wc -l)
+    dup=$(($(count "$2") - $(sort -u "$2" | wc -l)))
+    echo "$3: $(count "$2") realizations, $lost lost, $dup duplicated"
+    [ "$lost" -eq 0 ] && [ "$dup" -eq 0 ] || fail "$3: $lost lost, $dup duplicated"
+}
 # no_output STORE: a refused merge left nothing behind
 no_output() { [ ! -e "$1" ] && [ ! -e "$1.journal" ] || fail "a refused merge left $1 behind"; }
 
@@ -29,12 +39,14 @@ digest "$WORK/B.h5" B.digest
 run_expect 0 merge_ab "$EXE" merge "$WORK/A.h5" "$WORK/B.h5" --store "$WORK/AB.h5"
 expect_in merge_ab.out "3 points, 12 realizations (0 identical copies stored once), 2 runs"
 digest "$WORK/AB.h5" AB.digest
+lost_duplicated ref.digest AB.digest "merge AB"
 same_digests ref.digest AB.digest
 
 # (b) A store merged with itself.
 run_expect 0 merge_self "$EXE" merge "$WORK/ref.h5" "$WORK/ref.h5" --store "$WORK/self.h5"
 expect_in merge_self.out "12 realizations (12 identical copies stored once), 1 runs (1 shared"
 digest "$WORK/self.h5" self.digest
+lost_duplicated ref.digest self.digest "merge self"
 same_digests ref.digest self.digest
 
 # (c) Two halves of a killed-and-resumed run.
@@ -49,10 +61,12 @@ run_expect 0 resume_r "$EXE" run "$MINI" --store "$WORK/R.h5" --progress-interva
 run_expect 0 merge_kr "$EXE" merge "$WORK/K.h5" "$WORK/R.h5" --store "$WORK/KR.h5"
 expect_in merge_kr.out "12 realizations ($killed identical copies stored once), 2 runs (1 shared"
 digest "$WORK/KR.h5" KR.digest
+lost_duplicated ref.digest KR.digest "merge KR"
 same_digests ref.digest KR.digest
 # ... in either order
 run_expect 0 merge_rk "$EXE" merge "$WORK/R.h5" "$WORK/K.h5" --store "$WORK/RK.h5"
 digest "$WORK/RK.h5" RK.digest
+lost_duplicated ref.digest RK.digest "merge RK"
 same_digests ref.digest RK.digest
 
 # (e) The merged stores resume with nothing to run and stay the same; readers read them.
@@ -74,8 +88,14 @@ import hopper_store
 s = hopper_store.open_store(sys.argv[2])
 assert len(s.realizations) == 12, len(s.realizations)
 assert len(s.realizations.groupby(["point", "realization"])) == 12
-runs = s.runs if hasattr(s, "runs") else None
 s.close()
+import h5py
+with h5py.File(sys.argv[2], "r") as f:
+    reasons = list(f["runs/end_reason"].asstr()[:])
+    stored = [int(x) for x in f["runs/stored"][:]]
+# the killed run once (no end), its copy's resume, the merge, the resume of (e)
+assert reasons == ["", "complete", "merged 2 stores", "complete"], reasons
+assert sum(stored) == 12, stored
 print("hopper_store ok")
 EOF
 
