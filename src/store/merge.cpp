@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -27,10 +28,23 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A record of an input's journal. A result's payload is read again when it is copied (a store
+// with fields holds about 140 kB per realization: the inputs are not held in memory); the other
+// records are small and kept.
 struct Record {
-    RecordType type;
-    Bytes payload;
+    RecordType type = RecordType::result;
+    Bytes payload;  // empty for a result
+    // A result: where its payload is, its hash (checked when copied) and what is compared.
+    std::uint64_t offset = 0, size = 0, hash = 0;
+    std::string label;
+    int realization = 0;
+    std::uint64_t seed = 0, digest = 0;
+    engine::Status status = engine::Status::failed;
 };
+
+std::uint64_t hash_of(std::span<const std::uint8_t> p) {
+    return fnv1a64(std::string_view(reinterpret_cast<const char*>(p.data()), p.size()));
+}
 
 struct Input {
     fs::path path;
@@ -84,8 +98,24 @@ Input read_input(const fs::path& path) {
         const JournalScan scan = scan_journal(
             jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
                 apply_record(in.state, t, off, p, nullptr);
-                if (t != RecordType::sync)
-                    in.records.push_back(Record{t, Bytes(p.begin(), p.end())});
+                if (t == RecordType::sync) return;
+                Record rec;
+                rec.type = t;
+                if (t != RecordType::result) {
+                    rec.payload.assign(p.begin(), p.end());
+                } else {
+                    const ResultRecord r = decode_result_record(p);
+                    const engine::RealizationResult res = decode_result(r.result, "a result");
+                    rec.offset = off + record_header_size;
+                    rec.size = p.size();
+                    rec.hash = hash_of(p);
+                    rec.label = r.label;
+                    rec.realization = r.realization;
+                    rec.seed = r.seed;
+                    rec.digest = physics_digest(res);
+                    rec.status = res.status;
+                }
+                in.records.push_back(std::move(rec));
             });
         in.torn = scan.torn_bytes();
     } catch (const core::StoreError& e) {
@@ -184,6 +214,21 @@ void check_campaigns_agree(const std::vector<Input>& inputs) {
     }
 }
 
+// A result's payload read again from its input's journal, checked against the hash taken when
+// it was scanned (the bytes of a journal before its end never change: it is append-only).
+Bytes read_payload(const Input& in, const Record& rec) {
+    std::ifstream f(journal_path(in.path), std::ios::binary);
+    Bytes b(rec.size);
+    if (!f.seekg(static_cast<std::streamoff>(rec.offset)) ||
+        !f.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size())) ||
+        hash_of(b) != rec.hash)
+        throw core::StoreError("the journal of " + q(in.path) +
+                               " changed while the merge read it (realization " +
+                               std::to_string(rec.realization) + " of point '" + rec.label +
+                               "'); nothing was written");
+    return b;
+}
+
 struct Copy {
     std::size_t input;
     std::uint64_t digest;
@@ -214,7 +259,7 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
     // elsewhere shares the runs before the copy, byte for byte.
     struct Run {
         const Bytes* start;
-        std::vector<const Record*> records;
+        std::vector<std::pair<std::size_t, const Record*>> records;  // (input, record)
         int inputs = 0;
     };
     std::vector<Run> runs;
@@ -239,14 +284,13 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
             if (!current)  // the replay above refuses results before any run
                 refuse("the journal of " + q(in.path) + " has records before its first run");
             if (rec.type == RecordType::result) {
-                const ResultRecord r = decode_result_record(rec.payload);
-                const std::string what =
-                    "realization " + std::to_string(r.realization) + " of point '" + r.label + "'";
-                const engine::RealizationResult res = decode_result(r.result, what);
-                const Copy mine{i, physics_digest(res), r.seed, res.status};
-                const auto [it, added] = results.emplace(std::pair{r.label, r.realization}, mine);
+                const std::string what = "realization " + std::to_string(rec.realization) +
+                                         " of point '" + rec.label + "'";
+                const Copy mine{i, rec.digest, rec.seed, rec.status};
+                const auto [it, added] =
+                    results.emplace(std::pair{rec.label, rec.realization}, mine);
                 if (added) {
-                    runs[*current].records.push_back(&rec);
+                    runs[*current].records.emplace_back(i, &rec);
                     continue;
                 }
                 const Copy& o = it->second;
@@ -264,7 +308,7 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
                 continue;
             }
             if (copied.emplace(rec.type, key_of(rec.payload)).second)
-                runs[*current].records.push_back(&rec);
+                runs[*current].records.emplace_back(i, &rec);
         }
     }
     for (const Run& r : runs)
@@ -299,8 +343,10 @@ MergeReport merge_stores(const std::vector<fs::path>& paths, const fs::path& out
         created = true;
         for (const Run& r : runs) {
             journal.append_unsynced(RecordType::run_start, *r.start);
-            for (const Record* rec : r.records)
-                journal.append_unsynced(rec->type, rec->payload);
+            for (const auto& [i, rec] : r.records)
+                journal.append_unsynced(rec->type, rec->type == RecordType::result
+                                                       ? read_payload(inputs[i], *rec)
+                                                       : rec->payload);
         }
         journal.append_unsynced(RecordType::run_start, encode(own));
         RunEndRecord end;

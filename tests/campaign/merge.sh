@@ -3,7 +3,8 @@
 # duplicated and every realization identical to its source (store_digest: one line per
 # realization, fails on a duplicate or a journal/HDF5 mismatch):
 #   (a) the sweep's points split into two halves run into A and B, merged: the reference's digests
-#   (b) a store merged with itself: the same digests, nothing twice, its runs once
+#   (b) a store merged with itself: the same digests, nothing twice, its runs once (also one with
+#       fields: the same maps)
 #   (c) a run killed (SIGKILL) mid-way into A, A copied to B and B resumed to the end, A and B
 #       merged: the reference's digests
 #   (d) refusals, exit 2 and nothing written: another campaign seed, a point of the same label
@@ -48,6 +49,22 @@ expect_in merge_self.out "12 realizations (12 identical copies stored once), 1 r
 digest "$WORK/self.h5" self.digest
 lost_duplicated ref.digest self.digest "merge self"
 same_digests ref.digest self.digest
+
+# ... and a store with fields: the maps of every realization as they were
+run_expect 0 fields "$EXE" run "$DATA/mini_fields.toml" --store "$WORK/F.h5" --progress-interval 0
+run_expect 0 merge_fields "$EXE" merge "$WORK/F.h5" "$WORK/F.h5" --store "$WORK/FF.h5"
+digest "$WORK/F.h5" F.digest
+digest "$WORK/FF.h5" FF.digest
+lost_duplicated F.digest FF.digest "merge fields"
+same_digests F.digest FF.digest
+"$PY" - "$WORK/F.h5" "$WORK/FF.h5" <<'EOF' || fail "the merged field maps differ"
+import sys, h5py, numpy as np
+a, b = h5py.File(sys.argv[1], "r"), h5py.File(sys.argv[2], "r")
+assert sorted(a["fields"]) == sorted(b["fields"]) and len(a["fields"]) > 0
+for k in a["fields"]:
+    for m in a["fields"][k]:
+        assert np.array_equal(a["fields"][k][m][()], b["fields"][k][m][()]), (k, m)
+EOF
 
 # (c) Two halves of a killed-and-resumed run.
 start_job "$EXE" run "$MINI" --store "$WORK/K.h5" --progress-interval 0
