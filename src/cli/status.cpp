@@ -144,7 +144,8 @@ std::string status_json(const store::StoreStatus& s) {
     j["eta_basis"] = pe.basis;
     Json busy = Json::array();
     for (const auto& [rank, age] : pe.busy)
-        busy.push_back(Json{{"rank", rank}, {"seconds", json_number(age)}});
+        // "worker" is the name the text uses; "rank" kept for readers of the 0.4 JSON
+        busy.push_back(Json{{"worker", rank}, {"rank", rank}, {"seconds", json_number(age)}});
     j["busy_workers"] = std::move(busy);
     const double now = store::unix_now();
     Json running = Json::array();
@@ -237,7 +238,7 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
         if (!pe.busy.empty()) {
             out << "workers   ";
             for (std::size_t k = 0; k < pe.busy.size(); ++k)
-                out << (k ? ", " : "") << "rank " << pe.busy[k].first << " busy "
+                out << (k ? ", " : "") << "worker " << pe.busy[k].first << " busy "
                     << campaign::format_duration(pe.busy[k].second);
             out << " (since its last result or the run's start)\n";
         }
