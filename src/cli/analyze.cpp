@@ -1,4 +1,5 @@
 #include "cli/analyze.hpp"
+#include "cli/cite.hpp"
 
 #include <algorithm>
 #include <boost/program_options.hpp>
@@ -179,10 +180,17 @@ int analyze_store(const fs::path& store, bool json, bool write, std::ostream& ou
                   std::ostream& err, bool* written) {
     const analysis::StoreAnalysis result = analysis::analyze_store(store);
     const Analysis& a = result.analysis;
-    if (json)
+    if (json) {
         out << result.json << '\n';
-    else
+    } else {
         write_analysis(out, a);
+        // What to cite (issue 43); a store whose physics cannot be read for it still analyzes.
+        try {
+            write_cite_line(out, store.string(), store_cite_use(store.string()));
+        } catch (const std::exception& e) {
+            err << "campaign: note: no references listed (" << e.what() << ")" << std::endl;
+        }
+    }
     out.flush();
     // Inconsistent fields (grids that differ inside a point) are reported and make the exit
     // code 1; everything else is printed and written.

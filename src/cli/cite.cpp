@@ -64,8 +64,8 @@ const std::vector<Reference>& references() {
          "", "the Hertzian normal contact law (material.normal_law = hertz)",
          [](const CiteUse& u) { return u.hertz > 0; }},
         {"gear1971", "book", "Gear, C. William",
-         "Numerical Initial Value Problems in Ordinary Differential Equations", "Prentice-Hall",
-         "", "", "", "1971", "", "Englewood Cliffs, NJ",
+         "Numerical Initial Value Problems in Ordinary Differential Equations", "Prentice-Hall", "",
+         "", "", "1971", "", "Englewood Cliffs, NJ",
          "the fourth-order Gear predictor-corrector (integrator.scheme = gear4)",
          [](const CiteUse& u) { return u.gear4 > 0; }},
         {"swope1982", "article",
@@ -81,20 +81,19 @@ const std::vector<Reference>& references() {
          "the random generator of the fills and seeds (xoshiro256**)", always},
         {"kaplan1958", "article", "Kaplan, Edward L. and Meier, Paul",
          "Nonparametric estimation from incomplete observations",
-         "Journal of the American Statistical Association", "53", "282", "457--481", "1958", "",
-         "", "the Kaplan-Meier survival functions (campaign analyze, the survival figure)",
-         always},
+         "Journal of the American Statistical Association", "53", "282", "457--481", "1958", "", "",
+         "the Kaplan-Meier survival functions (campaign analyze, the survival figure)", always},
         {"lawless2003", "book", "Lawless, Jerald F.",
          "Statistical Models and Methods for Lifetime Data", "Wiley", "", "", "", "2003", "",
          "second edition, Hoboken, NJ",
          "the censored exponential fit of the survival times, tau and its interval", always},
         {"lilliefors1969", "article", "Lilliefors, Hubert W.",
          "On the {K}olmogorov-{S}mirnov test for the exponential distribution with mean unknown",
-         "Journal of the American Statistical Association", "64", "325", "387--389", "1969", "",
-         "", "the goodness-of-fit test of the exponential law", always},
+         "Journal of the American Statistical Association", "64", "325", "387--389", "1969", "", "",
+         "the goodness-of-fit test of the exponential law", always},
         {"efron1993", "book", "Efron, Bradley and Tibshirani, Robert J.",
-         "An Introduction to the Bootstrap", "Chapman \\& Hall", "", "", "", "1993", "",
-         "New York", "the parametric bootstrap of the goodness-of-fit p-value", always},
+         "An Introduction to the Bootstrap", "Chapman \\& Hall", "", "", "", "1993", "", "New York",
+         "the parametric bootstrap of the goodness-of-fit p-value", always},
         {"beverloo1961", "article", "Beverloo, W. A. and Leniger, H. A. and van de Velde, J.",
          "The flow of granular solids through orifices", "Chemical Engineering Science", "15",
          "3--4", "260--269", "1961", "", "", "the Beverloo fit of the flow rate", always},
@@ -105,16 +104,16 @@ const std::vector<Reference>& references() {
         {"zuriguel2005", "article",
          "Zuriguel, Iker and Garcimart{\\'\\i}n, Angel and Maza, Diego and Pugnaloni, Luis A. "
          "and Pastor, J. M.",
-         "Jamming during the discharge of granular matter from a silo", "Physical Review E",
-         "71", "5", "051303", "2005", "", "",
+         "Jamming during the discharge of granular matter from a silo", "Physical Review E", "71",
+         "5", "051303", "2005", "", "",
          "the avalanche sizes and the power-law divergence of <s> at a critical outlet", always},
         {"burnham2002", "book", "Burnham, Kenneth P. and Anderson, David R.",
          "Model Selection and Multimodel Inference", "Springer", "", "", "", "2002", "",
          "second edition, New York",
          "the AIC that chooses between the exponential and power-law fits", always},
         {"welford1962", "article", "Welford, B. P.",
-         "Note on a method for calculating corrected sums of squares and products",
-         "Technometrics", "4", "3", "419--420", "1962", "", "",
+         "Note on a method for calculating corrected sums of squares and products", "Technometrics",
+         "4", "3", "419--420", "1962", "", "",
          "the running means and variances of the fields ([fields] enabled)",
          [](const CiteUse& u) { return u.fields > 0; }},
         {"chan1979", "techreport", "Chan, Tony F. and Golub, Gene H. and LeVeque, Randall J.",
@@ -192,7 +191,9 @@ void bibtex(std::ostream& os, const Reference& r, const CiteUse& use) {
     const std::string type = r.type;
     field("author", r.authors);
     field("title", r.title);
-    field(type == "article" ? "journal" : type == "techreport" ? "institution" : "publisher",
+    field(type == "article"      ? "journal"
+          : type == "techreport" ? "institution"
+                                 : "publisher",
           type == "misc" ? "" : r.venue);
     field("volume", r.volume);
     field("number", r.number);
@@ -257,8 +258,8 @@ namespace {
 
 po::options_description cite_options() {
     po::options_description d("cite options");
-    d.add_options()                                                  //
-        ("bibtex", po::bool_switch(), "only the BibTeX entries")    //
+    d.add_options()                                                    //
+        ("bibtex", po::bool_switch(), "only the BibTeX entries")       //
         ("text", po::bool_switch(), "only the plain-text references")  //
         ("help,h", "show this help");
     return d;
@@ -277,15 +278,7 @@ void print_cite_help(std::ostream& os) {
        << cite_options();
 }
 
-int cite_command(const std::vector<std::string>& args) {
-    const po::variables_map vm = parse_command(args, cite_options(), "store");
-    if (vm.count("help")) {
-        print_cite_help(std::cout);
-        return 0;
-    }
-    const std::string path = single_positional(vm, "store", "store", "STORE.h5");
-    const bool only_bib = vm["bibtex"].as<bool>(), only_text = vm["text"].as<bool>();
-    if (only_bib && only_text) throw po::error("--bibtex and --text exclude each other");
+CiteUse store_cite_use(const std::string& path, std::string* campaign_name) {
     const store::StoreStatus st = store::read_status(path);
     std::vector<engine::SceneParams> scenes;
     int unknown = 0;
@@ -298,8 +291,33 @@ int cite_command(const std::vector<std::string>& args) {
     CiteUse use = cite_use(scenes);
     use.unknown = unknown;
     if (!st.runs.empty()) use.code_version = st.runs.back().info.code_version;
+    if (campaign_name) *campaign_name = st.campaign_name;
+    return use;
+}
+
+void write_cite_line(std::ostream& os, const std::string& path, const CiteUse& use) {
+    const std::vector<std::string> keys = cited_keys(use);
+    os << "to cite: `campaign cite " << path << "` lists " << keys.size()
+       << " references as text and BibTeX (";
+    for (std::size_t k = 0; k < keys.size(); ++k)
+        os << (k ? ", " : "") << keys[k];
+    os << ")\n";
+}
+
+int cite_command(const std::vector<std::string>& args) {
+    const po::variables_map vm = parse_command(args, cite_options(), "store");
+    if (vm.count("help")) {
+        print_cite_help(std::cout);
+        return 0;
+    }
+    const std::string path = single_positional(vm, "store", "store", "STORE.h5");
+    const bool only_bib = vm["bibtex"].as<bool>(), only_text = vm["text"].as<bool>();
+    if (only_bib && only_text) throw po::error("--bibtex and --text exclude each other");
+    std::string campaign_name;
+    const CiteUse use = store_cite_use(path, &campaign_name);
+    const int unknown = use.unknown;
     if (!only_bib) {
-        std::cout << "References for " << path << " (campaign '" << st.campaign_name << "', "
+        std::cout << "References for " << path << " (campaign '" << campaign_name << "', "
                   << use.points << " point(s)";
         if (unknown)
             std::cout << "; " << unknown

@@ -28,6 +28,13 @@ std::vector<std::string> cited_keys(const CiteUse& use);
 // The references as plain text (one paragraph each, with why it applies) and/or BibTeX.
 void write_citations(std::ostream& os, const CiteUse& use, bool text, bool bibtex);
 
+// What the store at `path` used (its points' physics, its newest run's code version);
+// `campaign_name`, when given, receives the store's campaign name.
+CiteUse store_cite_use(const std::string& path, std::string* campaign_name = nullptr);
+
+// The one line `analyze` ends with: the cite command for the store and the references' keys.
+void write_cite_line(std::ostream& os, const std::string& path, const CiteUse& use);
+
 void print_cite_help(std::ostream& os);
 int cite_command(const std::vector<std::string>& args);
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -345,6 +346,19 @@ TEST(CampaignCli, CiteListsWhatTheStoreUsed) {
     EXPECT_EQ(campaign("cite " + quote(store) + " --bibtex --text").code, 2);
     const Outcome none = campaign("cite " + quote(dir / "none.h5"));
     EXPECT_EQ(none.code, 1) << none.err;
+    // analyze ends its text with the cite command and the same keys; --json stays JSON alone
+    const Outcome an = campaign("analyze " + quote(store) + " --no-write");
+    ASSERT_EQ(an.code, 0) << an.err;
+    const std::string line = "to cite: `campaign cite " + store.string() + "` lists ";
+    const auto at = an.out.find(line);
+    ASSERT_NE(at, std::string::npos) << an.out;
+    const std::string tail = an.out.substr(at);
+    EXPECT_EQ(std::count(tail.begin(), tail.end(), '\n'), 1) << "not the last line: " << tail;
+    for (const char* key : {"hopper", "kondic2014", "tang2011", "gear1971"})
+        EXPECT_NE(tail.find(key), std::string::npos) << key << ": " << tail;
+    EXPECT_EQ(tail.find("hertz1882"), std::string::npos) << tail;
+    const Outcome js = campaign("analyze " + quote(store) + " --no-write --json");
+    EXPECT_EQ(js.out.find("to cite"), std::string::npos);
 }
 
 TEST(CampaignCli, SnapshotsWriteDumpFrames) {
