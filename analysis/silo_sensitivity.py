@@ -3,6 +3,7 @@
 effect on ln(<s>+1) per outlet and on the slope b.
 
 usage: silo_sensitivity.py STORE.h5 [STORE.h5 ...] [--baseline JSON_OR_STORE] [--json F] [--md F]
+                           [--png F]
 
 Every point of the stores is one lever setting at one outlet: its lever is the point's label
 less the outlet and the angle (`material.mu_r=0.1`; a point with nothing else is "baseline").
@@ -23,7 +24,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from hopper_store import open_store  # noqa: E402
-from silo_validation import fit, summarize_store  # noqa: E402
+from silo_validation import EXPERIMENTS, band, fit, summarize_store  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BASELINE = os.path.join(HERE, "..", "docs", "figures", "silo_validation.json")
@@ -113,6 +114,75 @@ def markdown(rows, fits):
     return "\n".join(lines) + "\n"
 
 
+def kappa_label(value):
+    """A collision time's stiffness as kappa = k_n d / (m g), which goes as 1 / tau_c^2: the
+    published photoelastic disks' 7.3e-4 s are kappa = 7.3e3 (docs/validation.md)."""
+    return "kappa %.2g (%s s)" % (7.3e3 * (7.3e-4 / float(value)) ** 2, value)
+
+
+def figure(rows, base, fits, path):
+    """ln(<s>+1) against (D/d)^2, one panel per lever family (the setting's name): the baseline
+    and its fit, each lever's points with their errors (joined where it has several outlets, its
+    fit drawn where it has one), the experiments and the band the model is held to."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    def family(lever):
+        return lever.split("=")[0] if lever.count("=") == 1 else lever.split("=")[0] + " + ..."
+
+    levers = sorted({r["lever"] for r in rows if r["lever"] != "baseline" and r["clogs"]})
+    fams = sorted({family(lv) for lv in levers})
+    if not fams:
+        raise SystemExit("silo_sensitivity.py: no lever with clogs to draw")
+    ncol = min(3, len(fams))
+    nrow = (len(fams) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.4 * nrow), squeeze=False,
+                             sharex=True, sharey=True)
+    xs = sorted({k for tab in EXPERIMENTS.values() for k in tab})
+    bx = [x * x for x in xs]
+    bands = [band(x) for x in xs]
+    bfit = fit(base)
+    for ax, fam in zip(axes.flat, fams):
+        ax.fill_between(bx, [b[0] for b in bands], [b[1] for b in bands], color="0.88",
+                        label="experiments +- 0.5")
+        for name, tab in EXPERIMENTS.items():
+            ks = sorted(tab)
+            ax.plot([k * k for k in ks], [tab[k] for k in ks], "k:" if "To" in name else "k--",
+                    lw=0.8, label=name)
+        bb = [r for r in base if r.get("y") is not None]
+        ax.errorbar([r["D_over_d"] ** 2 for r in bb], [r["y"] for r in bb],
+                    yerr=[r["y_err"] for r in bb], fmt="s", color="0.4", ms=4,
+                    label="baseline (kappa 7.3e3)")
+        if bfit:
+            ax.plot(bx, [bfit["a"] + bfit["b"] * x for x in bx], "-", color="0.4", lw=0.8)
+        for lever in [lv for lv in levers if family(lv) == fam]:
+            pts = sorted((r for r in rows if r["lever"] == lever and r["clogs"]),
+                         key=lambda r: r["D_over_d"])
+            x = [r["D_over_d"] ** 2 for r in pts]
+            name = lever.split(fam + "=")[-1] if family(lever) == fam else lever
+            if fam == "material.collision_time_s":
+                name = kappa_label(name)
+            line = ax.errorbar(x, [r["y"] for r in pts], yerr=[r["y_err"] for r in pts], fmt="o-",
+                               ms=4, lw=0.8, capsize=2, label=name)
+            f = fits.get(lever)
+            if f:
+                ax.plot(bx, [f["a"] + f["b"] * v for v in bx], "-", lw=1.4,
+                        color=line[0].get_color(), alpha=0.6)
+        ax.set_title(fam, fontsize=9)
+        ax.legend(fontsize=6, loc="upper left")
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(fams):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("(D/d)^2")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("ln(<s>+1)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("stores", nargs="+")
@@ -120,12 +190,14 @@ def main():
                     "(default: the stores' own baseline points, else %s)" % DEFAULT_BASELINE)
     ap.add_argument("--json")
     ap.add_argument("--md")
+    ap.add_argument("--png", help="the figure: ln(<s>+1) against (D/d)^2 per lever family")
     a = ap.parse_args()
     for p in a.stores:
         if not os.path.exists(p):
             sys.exit("silo_sensitivity.py: no store %s" % p)
     rows = [r for p in a.stores for r in rows_of(p)]
-    rows = compare(rows, baseline_rows(a.baseline, rows))
+    base = baseline_rows(a.baseline, rows)
+    rows = compare(rows, base)
     fits = lever_fits(rows)
     md = markdown(rows, fits)
     sys.stdout.write(md)
@@ -135,6 +207,8 @@ def main():
     if a.json:
         with open(a.json, "w") as fh:
             json.dump({"rows": rows, "fits": fits}, fh, indent=1)
+    if a.png:
+        figure(rows, base, fits, a.png)
 
 
 if __name__ == "__main__":

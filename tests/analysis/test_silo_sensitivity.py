@@ -59,4 +59,21 @@ check(abs(fits["k"]["b"] - 0.3) < 1e-9 and abs(fits["k"]["a"] - 0.5) < 1e-9,
 md = ss.markdown([dict(r, realizations=1, core_hours=0.0, base_y=None, dy=None, z=None)
                   for r in rows], fits)
 check("| k | 3.0, 3.5, 4.0 | 0.300 +- " in md, "the fit's table row:\n" + md)
+
+# kappa from a collision time: 7.3e3 at the published 7.3e-4 s, x100 at a tenth of it.
+check(ss.kappa_label("0.00073").startswith("kappa 7.3e+03"), ss.kappa_label("0.00073"))
+check(ss.kappa_label("7.3e-05").startswith("kappa 7.3e+05"), ss.kappa_label("7.3e-05"))
+
+# The figure: one panel per lever family, drawn from the rows above against a baseline.
+import tempfile  # noqa: E402
+png = os.path.join(tempfile.mkdtemp(), "sens.png")
+base_rows = [ss.with_log({"D_over_d": r_, "mean_s": math.exp(1.0 + 0.5 * r_ ** 2) - 1, "se": 1.0,
+                          "clogs": 10}) for r_ in (3.0, 3.5, 4.0)]
+ss.figure(rows, base_rows, fits, png)
+check(os.path.getsize(png) > 10000, "figure %s: %d bytes" % (png, os.path.getsize(png)))
+try:
+    ss.figure([dict(r, clogs=0) for r in rows], base_rows, {}, png + "2")
+    check(False, "a figure without a lever with clogs must refuse")
+except SystemExit as e:
+    check("no lever with clogs" in str(e), str(e))
 check.finish()
