@@ -132,20 +132,24 @@ thaw_job() {  # SIGCONT to what freeze_job stopped
     [ -n "${FROZEN:-}" ] && kill -CONT $FROZEN 2>/dev/null
     FROZEN=""
 }
-# freeze_when STORE COND WHAT: waits until the status satisfies COND (see status_has) while the
-# job runs, then freezes it and looks again; returns with the job frozen once the frozen look
-# satisfies COND too. Fails naming WHAT if the job ends first or after WAIT_BOUND seconds.
+# freeze_when STORE COND WHAT: returns with the job frozen in a state whose status satisfies
+# COND (see status_has). Fails naming WHAT if the job ends first or after WAIT_BOUND seconds.
+# The job advances in slices: it runs for SLICE seconds of the clock, then is frozen while the
+# status is read, and so on. A state that lasts longer than one slice of the job's progress
+# cannot pass unseen, however slow the looks are (a loaded machine makes `campaign status` and
+# Python take longer than a whole mini.toml run: campaign.mpi_hybrid once saw the run end
+# between two looks, issue 45). The job's share of the clock falls accordingly (a slice in every
+# look), so what it does before the state comes takes longer, never less.
+SLICE=0.05
 freeze_when() {
     local t_end=$((SECONDS + WAIT_BOUND))
     while :; do
-        if status_has "$1" "$2"; then
-            freeze_job
-            status_has "$1" "$2" && return 0
-            thaw_job
-        fi
+        freeze_job
+        status_has "$1" "$2" && return 0
+        thaw_job
         job_alive || fail "$3: the run ended first"
         [ "$SECONDS" -lt "$t_end" ] || fail "$3: not within $WAIT_BOUND s"
-        sleep 0.05
+        sleep "$SLICE"
     done
 }
 # pending_signal PID SIG: PID has SIG (a number) pending (stopped processes keep it so).
