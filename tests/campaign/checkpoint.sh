@@ -29,29 +29,24 @@ run_cmd() {  # run_cmd STORE [options...]: the command line for this NP
         echo mpirun -np "$NP" "$EXE" run "$SWEEP" --store "$store" --progress-interval 0 "$@"
     fi
 }
-# wait_running STORE SECONDS: until a realization has been running for SECONDS (status --json;
-# its age on the master's clock, from the dispatch). Writes "LABEL' #R" of the longest-running
-# one to running.txt (the form of the run's log lines), for the cases that check its fate.
-# Waits for the condition, not for a time: a loaded machine only makes it take longer (a
-# bound of 120 s against a hang).
+# wait_running STORE SECONDS: returns with the job frozen (lib.sh's freeze_when: the job
+# advances in slices between looks, so the state cannot pass unseen however slow the looks) once
+# a realization has been running for SECONDS (status --json; its age on the master's clock, from
+# the dispatch). Writes "LABEL' #R" of the longest-running one to running.txt (the form of the
+# run's log lines), for the cases that check its fate. A signal sent before thaw_job (stop_all
+# thaws) meets that very state.
 wait_running() {
-    local t_end=$((SECONDS + 120))
-    while [ "$SECONDS" -lt "$t_end" ]; do
-        if "$EXE" status "$1" --json 2>/dev/null | "$PY" -c "
+    freeze_when "$1" "s['running'] and max(t['seconds'] for t in s['running']) >= $2" \
+        "a realization of $1 running for $2 s"
+    "$EXE" status "$1" --json 2>/dev/null | "$PY" -c "
 import json, sys
-r = json.load(sys.stdin)['running']
-if not r: sys.exit(1)
-t = max(r, key=lambda t: t['seconds'])
-if t['seconds'] < $2: sys.exit(1)
-open('running.txt', 'w').write(\"%s' #%d\" % (t['label'], t['realization']))" 2>/dev/null; then
-            return 0
-        fi
-        sleep 0.05
-    done
-    fail "no realization of $1 ran for $2 s within 120 s"
+t = max(json.load(sys.stdin)['running'], key=lambda t: t['seconds'])
+open('running.txt', 'w').write(\"%s' #%d\" % (t['label'], t['realization']))" ||
+        fail "reading the running realization of $1"
 }
-stop_all() {  # SIGTERM to every campaign process of the job (as Slurm at the limit)
+stop_all() {  # SIGTERM to every campaign process of the job (as Slurm at the limit), frozen or not
     if [ "$NP" -eq 0 ]; then kill -TERM "$JOB"; else kill -TERM $(pgrep -s "$JOB" -x campaign); fi
+    thaw_job
     wait "$JOB"
     JOB_RC=$?
 }
@@ -125,6 +120,7 @@ STORE=$WORK/k.h5
 : >job.err
 start_job $(run_cmd "$STORE" --checkpoint-interval 0.3)
 wait_running "$STORE" 1.0
+thaw_job
 # The first periodic state is due 0.3 s into the realization; wait for its file (the condition
 # the kill needs), not a fixed time: on a loaded machine it can come later.
 t_end=$((SECONDS + 120))
@@ -147,8 +143,8 @@ expect_in phys.err "it was written for other physics of this point"
 
 # 5. Without checkpoints the interrupted worker time is thrown away, and /runs says so.
 #    The slow realizations (3.5-5.5 s of one quiet core each, ckpt.toml's about 1 s): the one
-#    seen running for 1 s still has 2.5 s or more of computing ahead, so it is still running at
-#    the SIGTERM sent right after the look, however loaded the machine (load slows both alike).
+#    seen running for 1 s is still running at the SIGTERM, sent while the job is frozen in the
+#    state that was seen (wait_running), however loaded the machine.
 #    (With ckpt.toml's, under ctest -j2 the one seen could end in that gap and a fresh one be
 #    stopped instead: 0.04 s lost, issue 45.) The test then checks that very realization was
 #    the one stopped, from the run's own log, before it asserts the loss: its worker time is
