@@ -70,8 +70,10 @@ const ForceTable& force_table(KernelPath p) {
             return force_table_avx512();
         case KernelPath::avx2:
             return force_table_avx2();
-        default:
+        case KernelPath::baseline:
             return force_table_baseline();
+        default:
+            return force_table_reference();
     }
 }
 

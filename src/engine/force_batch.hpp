@@ -1,17 +1,17 @@
 #pragma once
-// The batched force pass (issue 12): the same forces as the reference loop in kernel.cpp,
-// computed block by block (256 particles at a time, so that the scratch stays in the first-level
-// cache) in three passes per kind of partner (mobile, then wall):
-//   1. the touch test over the block's list entries, vectorized and computed exactly as the
-//      reference loop does; springs of the entries that do not touch are reset; the touching
-//      entries are then listed in order (entry, particle, partner): branch-free, and on AVX-512
-//      16 entries at a time, compressed in registers;
-//   2. the contact law over the touching entries, branch-free (pair_force.hpp, Select), in a
-//      loop the compiler vectorizes for the instruction set the translation unit is built for;
-//   3. accumulation (scalar, in list order): forces and torques summed in exactly the order of
-//      the reference loop, springs written back, so every path gives the reference's bits.
-// force_batch_impl.hpp holds the passes; force_batch_{baseline,avx2,avx512}.cpp compile it once
-// per instruction set, each in its own namespace; force_batch.cpp picks one at run time.
+// The force pass (issues 12 and 42), one source for every path: block by block (256 particles
+// at a time, so that the scratch stays in the first-level cache), per kind of partner (mobile,
+// then wall), the touch test over the block's list entries (the springs of the entries that do
+// not touch reset, the touching ones listed in order: entry, particle, partner), then the
+// contact law over the touching entries (pair_force.hpp), their forces and torques summed in
+// list order. force_batch_impl.hpp holds the pass as a template over its lanes:
+//   - one lane (force_batch_reference.cpp): the reference pass, scalar code, each contact added
+//     to the sums as its law is evaluated;
+//   - several (force_batch_{baseline,avx2,avx512}.cpp, the batched paths): the touch test and
+//     the law vectorized for the instruction set the translation unit is built for (the
+//     touching entries compacted 16 at a time in registers on AVX-512), the law's results kept
+//     per entry and then summed in the same order, so every path gives the reference's bits.
+// Each build is compiled in its own namespace; force_batch.cpp picks one at run time.
 
 #include <array>
 #include <cstdint>
@@ -25,7 +25,7 @@
 namespace hopper::engine::detail {
 
 // Everything a force pass reads and writes: raw columns of the System (mobile particles,
-// walls, neighbour list, springs) and scratch space for the batched passes.
+// walls, neighbour list, springs) and scratch space for the passes.
 struct ForceArgs {
     int n = 0;  // mobile particles
     const double *x, *y, *r;
@@ -45,7 +45,8 @@ struct ForceArgs {
     const int *po, *wo;  // the particle each list entry belongs to (set at each rebuild)
     // The corrector fused into the pass (integrate.hpp; scheme none: forces only).
     CorrectArgs correct;
-    // Scratch of the batched passes, for one block: flags per list entry, then per touching entry.
+    // Scratch for one block: flags per list entry (batched paths), then per touching entry (the
+    // indices on every path; the law's results on the batched paths, null on the reference).
     struct Scratch {
         int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
         double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per touching entry
@@ -62,12 +63,13 @@ struct ForceSums {
 
 using ForceFn = ForceSums (*)(const ForceArgs&);
 
-// The batched pass of one instruction set, by law (its id in the registry, laws.hpp) and
-// whether the contact corrections are on (see pair_force).
+// The force pass of one build, by law (its id in the registry, laws.hpp) and whether the
+// contact corrections are on (see pair_force).
 struct ForceTable {
     std::array<std::array<ForceFn, 2>, law_count> fn;
 };
 
+const ForceTable& force_table_reference();
 const ForceTable& force_table_baseline();
 const ForceTable& force_table_avx2();
 const ForceTable& force_table_avx512();
@@ -75,6 +77,6 @@ const ForceTable& force_table_avx512();
 // The path to use for `wanted` on this CPU; throws core::ConfigError if it is not available.
 KernelPath resolve_kernel(KernelPath wanted);
 bool kernel_available(KernelPath p);
-const ForceTable& force_table(KernelPath p);  // p is a batched path
+const ForceTable& force_table(KernelPath p);  // p is resolved (not automatic)
 
 }  // namespace hopper::engine::detail

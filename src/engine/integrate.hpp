@@ -33,8 +33,8 @@ HOPPER_HOT_INLINE void gear_correct_element(std::size_t i, double h, double inv_
     x4[i] += gear_c4 * e;
 }
 
-// The particles of one block of the fused passes: the reference loop corrects (and predicts
-// ahead, below) every block_rows rows, the batched passes work block by block of the same size.
+// The particles of one block of the force pass (force_batch_impl.hpp, every path): each block
+// is corrected (and predicted ahead, below) once its rows are done.
 inline constexpr int block_rows = 256;
 
 // What the fused integrator needs: the scheme (none: forces only, e.g. the priming evaluation)
@@ -64,10 +64,9 @@ struct CorrectArgs {
 // The corrector over the particles [i0, i1), whose forces (and torques when rot) are final:
 // the integrator's own multi-versioned loops (kernel.cpp: AVX-512, AVX2 or the baseline, picked
 // when the program starts) on that range, so the fused corrector is vectorized on every path
-// and gives the separate loops' bits. Called once per block of particles (the reference loop
-// every block_rows rows, the batched passes after each block). Defined in kernel.cpp, not
-// inline. Returns the block's largest squared next displacement when c.next_displacement (NaN
-// if a position is not finite), else 0.
+// and gives the separate loops' bits. Called once per block of particles, after its rows (the
+// force pass of every path). Defined in kernel.cpp, not inline. Returns the block's largest
+// squared next displacement when c.next_displacement (NaN if a position is not finite), else 0.
 double correct_block(const CorrectArgs& c, const double* fx, const double* fy, const double* tq,
                      bool rot, int i0, int i1);
 

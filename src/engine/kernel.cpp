@@ -1,10 +1,8 @@
-// The System's kernel: integrators and the reference force loop (kernel.hpp).
+// The System's kernel: the integrators, and the force pass of the chosen path (kernel.hpp).
 #include "kernel.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -13,7 +11,6 @@
 #include "hopper/core/error.hpp"
 #include "integrate.hpp"
 #include "laws.hpp"
-#include "pair_force.hpp"
 
 namespace hopper::engine {
 
@@ -362,211 +359,13 @@ struct KernelImpl final : System::Kernel {
         if (correct) correct_args(s, a.correct, predict);
         bool two = false;
         velocity_sets(s, a, two);
-        detail::ForceSums sums;
-        if (s.kernel_path_ == KernelPath::reference) {
-            sums = two ? reference<true>(a) : reference<false>(a);
-        } else {
-            sums = detail::force_table(s.kernel_path_).fn[detail::law_id<Law>][two ? 1 : 0](a);
-        }
+        // The force pass of the chosen path (force_batch.hpp: the reference is its scalar
+        // build), for this law, with or without the springs' own velocity set.
+        const detail::ForceSums sums =
+            detail::force_table(s.kernel_path_).fn[detail::law_id<Law>][two ? 1 : 0](a);
         s.wall_force_ = Vec2(sums.wall_fx, sums.wall_fy);
         s.contacts_ = sums.contacts;
         return sums;
-    }
-
-    // The reference force pass (round 3, third session; docs/performance.md): block by block
-    // of block_rows rows, per kind of partner (mobile, then wall), two scalar loops over the
-    // block's list entries, neither with a branch on the data:
-    //   1. the touch test of every entry (the springs of those that do not touch reset by a
-    //      mask on their bits), the touching entries listed in order (entry, particle,
-    //      partner) by unconditional stores and an increment of the count by the outcome;
-    //   2. the contact law over the touching entries only, the partners' shares subtracted as
-    //      they come and each particle's own sums kept in the block's local arrays.
-    // The row-by-row loop before it branched on the touch test (about 63 % of the entries
-    // touch, in no pattern a predictor keeps at 8750 disks) and cost 1.2x this at 8750 disks
-    // (the cost per contact that "grew with size" was the predictor's capacity). The sums are
-    // those of the row-by-row loop and of the batched passes, which have the same structure
-    // with the law vectorized: per particle the shares from earlier rows as they come, its own
-    // mobile entries summed from 0 in list order, its wall entries likewise (the torque
-    // continuing from the mobile sum), then fx += (mobile + wall) once the block is done (no
-    // later row names a particle of the block). Each block is corrected once its rows are
-    // done (when a.correct says so) and, in the fused step, predicted before its rows
-    // (a.correct.predict). The batched paths must give exactly its bits (test_kernel_paths).
-    // The Coulomb cap stays a branch (pair_force<..., Select = false>): sliding contacts are
-    // few, and the select would add a square root and a division to every contact.
-
-    // Pass 1 over the entries [k0, k1) of one kind of partner: the touching ones listed in
-    // (entry, owner, partner), springs of the others reset. Returns how many touch.
-    template <bool Wall>
-    [[gnu::always_inline]] static int touching(const detail::ForceArgs& a, int k0, int k1) {
-        const int* __restrict own = Wall ? a.wo : a.po;
-        const int* __restrict other = Wall ? a.wj : a.pj;
-        const double* __restrict x = a.x;
-        const double* __restrict y = a.y;
-        const double* __restrict r = a.r;
-        const double* __restrict px = Wall ? a.wx : a.x;
-        const double* __restrict py = Wall ? a.wy : a.y;
-        const double* __restrict pr = Wall ? a.wr : a.r;
-        double* __restrict hx = Wall ? a.gx : a.hx;
-        double* __restrict hy = Wall ? a.gy : a.hy;
-        int* __restrict entry = a.scratch.entry;
-        int* __restrict owner = a.scratch.owner;
-        int* __restrict partner = a.scratch.partner;
-        const double ox = a.ox, oy = a.oy;
-        int m = 0;
-        for (int k = k0; k < k1; ++k) {
-            const int i = own[k], j = other[k];
-            // The same expressions as the law's input below (and the batched passes').
-            const double dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
-            const double dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
-            const double rs = r[i] + pr[j];
-            const bool touch = !(dx * dx + dy * dy >= rs * rs);
-            if constexpr (hist) {
-                // Not touching: the spring is forgotten (+0.0 exactly, as a select gives), by
-                // a mask on the bits: GCC turns a select of a stored value into a branch.
-                const std::uint64_t keep = std::uint64_t(0) - std::uint64_t(touch);
-                hx[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hx[k]) & keep);
-                hy[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hy[k]) & keep);
-            }
-            entry[m] = k;  // the scratch has room for one more than the entries
-            owner[m] = i;
-            partner[m] = j;
-            m += int(touch);
-        }
-        return m;
-    }
-
-    // Pass 2: the law over the m touching entries listed by pass 1; each particle's own sums
-    // (fxi, fyi, tqi: indexed by particle - i0) continue from what they hold.
-    template <bool Corr, bool Wall>
-    [[gnu::always_inline]] static double evaluate(const detail::ForceArgs& a, int m, int i0,
-                                                  double max_ov, double* __restrict fxi,
-                                                  double* __restrict fyi, double* __restrict tqi) {
-        using detail::PairInput;
-        using detail::PairOutput;
-        const int* __restrict entry = a.scratch.entry;
-        const int* __restrict owner = a.scratch.owner;
-        const int* __restrict partner = a.scratch.partner;
-        const double* __restrict x = a.x;
-        const double* __restrict y = a.y;
-        const double* __restrict r = a.r;
-        const double* __restrict px = Wall ? a.wx : a.x;
-        const double* __restrict py = Wall ? a.wy : a.y;
-        const double* __restrict pr = Wall ? a.wr : a.r;
-        const double* __restrict vx = a.vx;
-        const double* __restrict vy = a.vy;
-        const double* __restrict w = a.w;
-        const double* __restrict svx = a.svx;
-        const double* __restrict svy = a.svy;
-        const double* __restrict sw = a.sw;
-        double* __restrict fx = a.fx;
-        double* __restrict fy = a.fy;
-        double* __restrict tq = a.tq;
-        double* __restrict hx = Wall ? a.gx : a.hx;
-        double* __restrict hy = Wall ? a.gy : a.hy;
-        const double* __restrict mbar = Wall ? a.wmbar : a.pmbar;
-        const double* __restrict rstar = Wall ? a.wrstar : a.prstar;
-        const double* __restrict hK = Wall ? a.wK : a.pK;
-        const double* __restrict heta = Wall ? a.weta : a.peta;
-        const ContactParams p = Wall ? a.pw : a.pp;
-        const double dt = a.dt, lever_half = a.lever_half;
-        const double ox = a.ox, oy = a.oy, vwx = a.vwx, vwy = a.vwy;
-        double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
-        for (int t = 0; t < m; ++t) {
-            const int k = entry[t], i = owner[t], j = partner[t];
-            PairInput q;
-            q.dx = Wall ? x[i] - (px[j] + ox) : x[i] - px[j];
-            q.dy = Wall ? y[i] - (py[j] + oy) : y[i] - py[j];
-            q.ri = r[i];
-            q.rj = pr[j];
-            q.rs = q.ri + q.rj;
-            q.d2 = q.dx * q.dx + q.dy * q.dy;
-            q.mbar = mbar[k];  // m_i m_j / (m_i + m_j), set at the rebuild
-            if constexpr (law_needs_rstar<Law>) q.rstar = rstar[k];
-            if constexpr (law_needs_pair_constants<Law>) {
-                q.hertz_K = hK[k];
-                q.hertz_eta = heta[k];
-            }
-            q.vix = vx[i];
-            q.viy = vy[i];
-            q.wi = rot ? w[i] : 0.0;
-            q.vjx = Wall ? vwx : vx[j];
-            q.vjy = Wall ? vwy : vy[j];
-            q.wj = Wall || !rot ? 0.0 : w[j];
-            if constexpr (Corr) {  // the springs' own velocities: only with the corrections
-                q.six = svx[i];
-                q.siy = svy[i];
-                q.swi = rot ? sw[i] : 0.0;
-                q.sjx = Wall ? vwx : svx[j];
-                q.sjy = Wall ? vwy : svy[j];
-                q.swj = Wall || !rot ? 0.0 : sw[j];
-            }
-            double& sx = hist ? hx[k] : no_spring_x;
-            double& sy = hist ? hy[k] : no_spring_y;
-            const PairOutput o = detail::pair_force<Law, Corr, false>(p, dt, lever_half, q, sx, sy);
-            const int b = i - i0;
-            fxi[b] += o.fx;
-            fyi[b] += o.fy;
-            if constexpr (!Wall) {  // Newton's third law
-                fx[j] -= o.fx;
-                fy[j] -= o.fy;
-            }
-            if constexpr (rot) {
-                tqi[b] -= o.ti;                      // -l_i (n x F_t)
-                if constexpr (!Wall) tq[j] -= o.tj;  // -l_j (n x F_t): the same form
-            }
-            max_ov = o.overlap > max_ov ? o.overlap : max_ov;
-        }
-        return max_ov;
-    }
-
-    template <bool Corr>
-    static detail::ForceSums reference(const detail::ForceArgs& a) {
-        const int n = a.n;
-        double* __restrict fx = a.fx;
-        double* __restrict fy = a.fy;
-        double* __restrict tq = a.tq;
-        const detail::CorrectArgs& cor = a.correct;
-        int predicted = 0;  // the fused step: particles [0, predicted) are predicted
-        if (!cor.predict) {
-            std::fill(fx, fx + n, 0.0);
-            std::fill(fy, fy + n, 0.0);
-            if constexpr (rot) std::fill(tq, tq + n, 0.0);
-        }
-        constexpr int B = detail::block_rows;
-        double fxm[B], fym[B], tqm[B], fxw[B], fyw[B];
-        double max_ov = 0.0, wfx = 0.0, wfy = 0.0, next_d2 = 0.0;
-        int contacts = 0;
-        for (int i0 = 0; i0 < n; i0 += B) {
-            const int i1 = std::min(n, i0 + B);
-            const int bi = i1 - i0;
-            // The fused step: this block's rows and their partners predicted (and their forces
-            // zeroed) before any row reads them (integrate.hpp).
-            detail::predict_ahead(cor, fx, fy, tq, rot, i0 / B, predicted);
-            for (int b = 0; b < bi; ++b)
-                fxm[b] = fym[b] = tqm[b] = fxw[b] = fyw[b] = 0.0;
-            // Mobile partners: each pair once, Newton's third law.
-            int m = touching<false>(a, a.ps[i0], a.ps[i1]);
-            max_ov = evaluate<Corr, false>(a, m, i0, max_ov, fxm, fym, tqm);
-            contacts += m;
-            // Wall partners: immobile (or moving rigidly while shaking), inverse mass 0; the
-            // torque continues from the mobile partners'.
-            m = touching<true>(a, a.ws[i0], a.ws[i1]);
-            max_ov = evaluate<Corr, true>(a, m, i0, max_ov, fxw, fyw, tqm);
-            contacts += m;
-            for (int i = i0; i < i1; ++i) {
-                const int b = i - i0;
-                fx[i] += fxm[b] + fxw[b];
-                fy[i] += fym[b] + fyw[b];
-                wfx -= fxw[b];
-                wfy -= fyw[b];
-                if constexpr (rot) tq[i] += tqm[b];
-            }
-            // The block's forces are final (later rows never name its particles) and nothing
-            // later reads their state: the corrector, fused (integrate.hpp).
-            next_d2 =
-                detail::max_or_nan(next_d2, detail::correct_block(cor, fx, fy, tq, rot, i0, i1));
-        }
-        return {max_ov, wfx, wfy, contacts, next_d2};
     }
 };
 

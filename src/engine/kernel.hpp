@@ -2,7 +2,8 @@
 // The System's kernel (private to the engine): one contact law and one integrator chosen at
 // setup, so that the hot loops contain no configuration branches and no per-contact virtual
 // calls (one virtual call per phase). kernel.cpp holds the integrators (Gear predictor-corrector,
-// velocity Verlet, the contact corrections' second velocity set) and the reference force loop.
+// velocity Verlet, the contact corrections' second velocity set) and calls the force pass of
+// the chosen path (force_batch.hpp).
 
 #include <memory>
 

@@ -1,9 +1,9 @@
 #pragma once
 // The registry of contact laws (issue 28; docs/model.md, "Contact forces"), private to the
-// engine: the one list that the reference force loop (kernel.cpp) and every batched pass
-// (force_batch_impl.hpp, compiled once per instruction set) instantiate. Adding a law is a
-// value type with evaluate() (contact.hpp has the three of today and their contract) and one
-// entry in `Laws`; nothing else lists laws. A scene's law is chosen once, by System (law_for,
+// engine: the one list that the kernels (kernel.cpp) and every build of the force pass
+// (force_batch_impl.hpp: the reference and each instruction set's batched pass) instantiate. Adding
+// a law is a value type with evaluate() (contact.hpp has the three of today and their contract) and
+// one entry in `Laws`; nothing else lists laws. A scene's law is chosen once, by System (law_for,
 // system.cpp), as its index in this list.
 
 #include <array>

@@ -1,8 +1,8 @@
 #pragma once
-// The force of one touching pair, written once for every force loop: the reference loop in
-// system.cpp and the batched paths of force_batch_impl.hpp (scalar, AVX2 and AVX-512 builds of
-// the same source). Plain doubles, no branches that depend on the data (selects instead), and
-// always inlined, so that a loop over pairs vectorizes and every path performs the same
+// The force of one touching pair, written once for every build of the force pass
+// (force_batch_impl.hpp: the reference with one lane, the batched baseline, AVX2 and AVX-512
+// builds of the same source). Plain doubles, no branches that depend on the data (selects instead),
+// and always inlined, so that a loop over pairs vectorizes and every path performs the same
 // operations in the same order: the same bits on every instruction set (with FMA contraction
 // off, see src/engine/CMakeLists.txt).
 
@@ -45,7 +45,7 @@ HOPPER_HOT_INLINE void relative_velocity(bool rot, double vix, double viy, doubl
     }
 }
 
-// Select: see contact.hpp (true in the batched passes, false in the reference loop).
+// Select: see contact.hpp (true in the batched passes, false in the reference pass).
 // lever_half: 0 (lever arm R) or 0.5 (R - x/2). Corr (contact corrections): the spring grows
 // with the second velocity set, and a new spring (exactly (0, 0)) only over the estimated part
 // of the step spent in contact, min(1, x / (|s_n| dt)).

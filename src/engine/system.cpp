@@ -327,8 +327,8 @@ detail::ForceArgs System::force_args() {
     a.po = pown_.data();
     a.wo = wown_.data();
     // Scratch of the force passes: columns with room for every entry of either list (a block
-    // uses the part of its own entries). The reference loop lists its touching entries in the
-    // index columns (kernel.cpp); the batched passes also keep their results per entry.
+    // uses the part of its own entries). Every path lists its touching entries in the index
+    // columns (force_batch_impl.hpp); the batched paths also keep the law's results per entry.
     const std::size_t len = std::max(pj_.size(), wj_.size()) + 16;  // 16: slack for the
                                                                     // 16-wide stores
     if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
