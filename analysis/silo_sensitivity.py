@@ -99,12 +99,19 @@ def fmt(v, spec="%.2f"):
 def markdown(rows, fits):
     lines = ["| lever | D/d | realizations | clogs | <s> +- se | ln(<s>+1) +- se | baseline | "
              "difference | z | core-hours |", "|---|---|---|---|---|---|---|---|---|---|"]
+    waiting = [r for r in rows if not r["realizations"]]
     for r in sorted(rows, key=lambda r: (r["D_over_d"], r["lever"])):
+        if not r["realizations"]:
+            continue
         ms = "-" if not r["clogs"] else "%.4g +- %.2g" % (r["mean_s"], r["se"])
         lines.append("| %s | %.2f | %d | %d | %s | %s | %s | %s | %s | %.2f |" % (
             r["lever"], r["D_over_d"], r["realizations"], r["clogs"], ms,
             "-" if r["y"] is None or not r["clogs"] else "%.2f +- %.2f" % (r["y"], r["y_err"]),
             fmt(r["base_y"]), fmt(r["dy"], "%+.2f"), fmt(r["z"], "%+.1f"), r["core_hours"]))
+    if waiting:
+        lines += ["", "Nothing stored yet: " + "; ".join(
+            "%s at D/d %.2f" % (r["lever"], r["D_over_d"])
+            for r in sorted(waiting, key=lambda r: (r["D_over_d"], r["lever"]))) + "."]
     if fits:
         lines += ["", "| lever | outlets | b +- se | a +- se |", "|---|---|---|---|"]
         for lever, f in fits.items():

@@ -59,6 +59,11 @@ check(abs(fits["k"]["b"] - 0.3) < 1e-9 and abs(fits["k"]["a"] - 0.5) < 1e-9,
 md = ss.markdown([dict(r, realizations=1, core_hours=0.0, base_y=None, dy=None, z=None)
                   for r in rows], fits)
 check("| k | 3.0, 3.5, 4.0 | 0.300 +- " in md, "the fit's table row:\n" + md)
+# A point with nothing stored yet: no table row, named in the line after the table.
+md = ss.markdown([dict(r, realizations=1, core_hours=0.0, base_y=None, dy=None, z=None)
+                  for r in rows] + [dict(rows[0], lever="later", realizations=0, clogs=0,
+                                         core_hours=0.0, base_y=None, dy=None, z=None)], fits)
+check("| later |" not in md and "Nothing stored yet: later at D/d 3.00." in md, md)
 
 # kappa from a collision time: 7.3e3 at the published 7.3e-4 s, x100 at a tenth of it.
 check(ss.kappa_label("0.00073").startswith("kappa 7.3e+03"), ss.kappa_label("0.00073"))
