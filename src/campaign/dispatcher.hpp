@@ -132,6 +132,8 @@ class Dispatcher {
     std::vector<char> finished_;    // a result was stored by this run
     std::vector<char> reassigned_;  // handed to another worker after a silence
     std::map<std::size_t, std::uint64_t> digest_;  // reassigned and stored: physics digest
+    std::vector<Item> stored_in_batch_;  // stored since the store's last commit (checkpoints on)
+    bool running_changed_ = false;       // a worker became idle since the running file was written
 
     bool draining_ = false, stop_sent_ = false, stop_announced_ = false;
     Clock::time_point drain_deadline_{};

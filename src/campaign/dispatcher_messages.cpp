@@ -54,7 +54,7 @@ void Dispatcher::on_reply(int worker, const Message& m) {
     const Busy was = it->second;
     busy_.erase(it);
     idle_.push_back(worker);
-    update_running();
+    running_changed_ = true;  // the running file is rewritten once per pass of the loop
     switch (m.kind) {
         case MessageKind::result:
             accept_result(worker, item, m, was.resumed);
@@ -78,7 +78,7 @@ void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const M
     if (ckpt_ && was.resumed && what.starts_with(checkpoint_refused)) {
         --report_.resumed;
         if (finished_[item.index])
-            ckpt_->remove(key_of(item));
+            stored_in_batch_.push_back(item);  // once its result is durable
         else
             restart_without_checkpoint(item, std::string(what.substr(checkpoint_refused.size())) +
                                                  ": the checkpoint of '" + todo_[item.index].label +
@@ -163,7 +163,7 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
     store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker, item.attempt, seconds,
                                       store::unix_now(), m.payload});
     finished_[item.index] = 1;
-    if (ckpt_) ckpt_->remove(key_of(item));
+    if (ckpt_) stored_in_batch_.push_back(item);  // its file goes once the result is durable
     if (t.expected_seconds > 0 && seconds > 0) {
         measured_seconds_ += seconds;
         measured_expected_ += t.expected_seconds;

@@ -109,6 +109,18 @@ struct Store::Impl {
     std::chrono::steady_clock::time_point last_flush{};
     bool run_open = false;
     int crash_passes = 0;
+    // A batch (begin_batch .. commit): records written to the journal, not yet synced; their
+    // HDF5 view updates wait for the sync.
+    bool batch_open = false;
+    bool unsynced = false;  // the journal holds records written in the batch
+    struct Pending {
+        int point = 0;
+        std::int64_t row = -1;  // a result's row; -1: an error record
+        ResultRecord result;    // its payload dropped (the view has the decoded result)
+        engine::RealizationResult decoded;
+        ErrorRecord error;
+    };
+    std::vector<Pending> pending;
 
     std::string where() const { return "store '" + path.string() + "'"; }
 
@@ -326,11 +338,48 @@ void Store::append(const ResultRecord& r) {
         throw core::StoreError("internal: the result of '" + r.label + "' #" +
                                std::to_string(r.realization) + " has seed " +
                                std::to_string(res.seed) + ", its task " + std::to_string(r.seed));
-    m.journal->append(RecordType::result, encode(r));
+    if (m.batch_open) {
+        m.journal->append_unsynced(RecordType::result, encode(r));
+        m.unsynced = true;
+    } else
+        m.journal->append(RecordType::result, encode(r));
     const std::int64_t row = m.state.apply(r, res);
     m.state.last_type = RecordType::result;
+    if (m.batch_open) {
+        if (row < 0) return;
+        Impl::Pending p{m.state.find_point(r.label), row, r, res, {}};
+        p.result.result.clear();
+        m.pending.push_back(std::move(p));
+        return;
+    }
     m.update_view([&] {
         if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
+        m.maybe_flush();
+    });
+}
+
+void Store::begin_batch() {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: begin_batch() outside a run");
+    m.batch_open = true;
+}
+
+void Store::commit() {
+    Impl& m = *impl_;
+    if (!m.batch_open) return;
+    m.batch_open = false;
+    std::vector<Impl::Pending> pending = std::move(m.pending);
+    m.pending.clear();
+    if (m.unsynced) m.journal->sync();
+    m.unsynced = false;
+    if (pending.empty()) return;
+    m.update_view([&] {
+        for (const Impl::Pending& p : pending) {
+            if (p.row >= 0)
+                m.writer->result(m.state, p.point, p.row, p.result, p.decoded);
+            else
+                m.writer->error(m.state, p.point, p.error);
+        }
         m.maybe_flush();
     });
 }
@@ -338,6 +387,7 @@ void Store::append(const ResultRecord& r) {
 void Store::allot(const AllotmentRecord& r) {
     Impl& m = *impl_;
     if (!m.run_open) throw core::StoreError("internal: allot() outside a run");
+    commit();
     AllotmentRecord grow;
     for (const auto& p : r.points) {
         const int i = m.state.find_point(p.label);
@@ -370,9 +420,17 @@ void Store::append(const ErrorRecord& r) {
     if (!m.run_open) throw core::StoreError("internal: append() outside a run");
     if (m.state.find_point(r.label) < 0)
         throw core::StoreError("internal: error for unplanned point '" + r.label + "'");
-    m.journal->append(RecordType::error, encode(r));
+    if (m.batch_open) {
+        m.journal->append_unsynced(RecordType::error, encode(r));
+        m.unsynced = true;
+    } else
+        m.journal->append(RecordType::error, encode(r));
     const int p = m.state.apply(r);
     m.state.last_type = RecordType::error;
+    if (m.batch_open) {
+        m.pending.push_back(Impl::Pending{p, -1, {}, {}, r});
+        return;
+    }
     m.update_view([&] {
         m.writer->error(m.state, p, r);
         m.maybe_flush();
@@ -382,6 +440,7 @@ void Store::append(const ErrorRecord& r) {
 void Store::end_run(const RunEndRecord& r) {
     Impl& m = *impl_;
     if (!m.run_open) throw core::StoreError("internal: end_run() outside a run");
+    commit();
     m.journal->append(RecordType::run_end, encode(r));
     m.state.apply(r);
     const std::uint64_t token = random_token();

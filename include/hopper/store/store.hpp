@@ -170,7 +170,7 @@ struct MergeInputSummary {
 };
 struct MergeReport {
     std::vector<MergeInputSummary> inputs;
-    std::int64_t realizations = 0;    // in the merged store
+    std::int64_t realizations = 0;      // in the merged store
     std::int64_t identical_copies = 0;  // copies of a realization found in another input too
     int points = 0;
     int runs = 0;         // input runs copied (shared ones once), the merge's own not counted
@@ -226,8 +226,19 @@ class Store {
     // allotment grows; nothing when none does), before they are handed out.
     void allot(const AllotmentRecord& r);
     // Durable (journal fsync) when it returns; the HDF5 file follows within flush_interval.
+    // Inside a batch: written to the journal at once, durable when commit() returns.
     void append(const ResultRecord& r);
     void append(const ErrorRecord& r);
+    // Group commit (issue 44): the results and errors appended between begin_batch() and
+    // commit() are written to the journal one by one as they come but synced together, by one
+    // fdatasync in commit(), which only then brings them into the HDF5 view (the view never
+    // holds what the journal might lose). Their realizations count as done when commit()
+    // returns. The records, their order and so the store's bytes are those of single appends;
+    // a kill before commit() leaves at most a torn last record, as before, and a machine
+    // crash loses at most the batch (its realizations run again). allot() and end_run() commit
+    // an open batch first.
+    void begin_batch();
+    void commit();
     // Records the end of the run, closes the HDF5 file in step with the journal.
     void end_run(const RunEndRecord& r);
 
