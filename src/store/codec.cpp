@@ -35,13 +35,47 @@ constexpr auto crc32c_table = make_crc32c_table();
 
 constexpr std::uint32_t result_magic = 0x31525248;  // "HRR1" little-endian
 
+std::uint32_t crc32c_bytewise(const std::uint8_t* p, std::size_t n, std::uint32_t crc) {
+    for (std::size_t i = 0; i < n; ++i)
+        crc = crc32c_table[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
+    return crc;
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// SSE 4.2's crc32 instruction computes this very CRC (Castagnoli, reflected), 8 bytes at a
+// time: the same value as the table, about 15x faster (issue 44: the table was 13 % of the
+// master's time at 64 workers, and most of a journal replay's).
+__attribute__((target("sse4.2"))) std::uint32_t crc32c_sse42(const std::uint8_t* p, std::size_t n,
+                                                             std::uint32_t crc) {
+    std::uint64_t c = crc;
+    for (; n >= 8; n -= 8, p += 8) {
+        std::uint64_t v;
+        std::memcpy(&v, p, 8);
+        c = __builtin_ia32_crc32di(c, v);
+    }
+    auto c32 = static_cast<std::uint32_t>(c);
+    for (; n > 0; --n, ++p)
+        c32 = __builtin_ia32_crc32qi(c32, *p);
+    return c32;
+}
+bool have_sse42() {
+    static const bool have = [] {
+        __builtin_cpu_init();
+        return __builtin_cpu_supports("sse4.2") != 0;
+    }();
+    return have;
+}
+#endif
+
 }  // namespace
 
 std::uint32_t crc32c(std::span<const std::uint8_t> data, std::uint32_t crc) {
     crc = ~crc;
-    for (std::uint8_t b : data)
-        crc = crc32c_table[(crc ^ b) & 0xffu] ^ (crc >> 8);
-    return ~crc;
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+    if constexpr (std::endian::native == std::endian::little)
+        if (have_sse42()) return ~crc32c_sse42(data.data(), data.size(), crc);
+#endif
+    return ~crc32c_bytewise(data.data(), data.size(), crc);
 }
 
 std::uint64_t fnv1a64(std::string_view text, std::uint64_t h) {
