@@ -330,24 +330,34 @@ Point Parser::make_point(const PointDraft& draft, int default_realizations) cons
         pt.label += (pt.label.empty() ? "" : " ") + to_string(s);
     pt.realizations = draft.realizations.value_or(default_realizations);
     pt.scene = build_scene(draft.overrides, "in point '" + pt.label + "' (" + draft.origin + ")");
-    // Every key of the table: as the file gave it, else as the scene has it (its default, or the
-    // value it follows), in file units. Unset optionals are left out.
-    const Assignments given = merged(draft.overrides);
-    for (const auto& d : key_table()) {
-        const std::string name(d.name);
-        if (const auto it = given.find(name); it != given.end())
-            pt.parameters.push_back(core::Setting{name, it->second.value});
-        else if (auto v = d.read(pt.scene))
-            pt.parameters.push_back(core::Setting{name, std::move(*v)});
-    }
+    pt.parameters = parameters_of(draft.overrides, pt.scene);
     return pt;
 }
 
+std::vector<core::Setting> Parser::parameters_of(const std::vector<Given>& overrides,
+                                                 const engine::SceneParams& scene) const {
+    // Every key of the table: as the file gave it, else as the scene has it (its default, or the
+    // value it follows), in file units. Unset optionals are left out.
+    std::vector<core::Setting> out;
+    const Assignments given = merged(overrides);
+    for (const auto& d : key_table()) {
+        const std::string name(d.name);
+        if (const auto it = given.find(name); it != given.end())
+            out.push_back(core::Setting{name, it->second.value});
+        else if (auto v = d.read(scene))
+            out.push_back(core::Setting{name, std::move(*v)});
+    }
+    return out;
+}
+
 SweepFile Parser::run() {
+    return run(parse_toml(text_, file_));
+}
+
+SweepFile Parser::run(const toml::table& root) {
     SweepFile out;
     out.path = path_;
     out.text = std::string(text_);
-    const toml::table root = parse_toml(text_, file_);
 
     const toml::node* sweep = nullptr;
     const toml::node* points = nullptr;
@@ -375,6 +385,7 @@ SweepFile Parser::run() {
     }
 
     out.base = build_scene({}, "");
+    out.base_parameters = parameters_of({}, out.base);
 
     if (!campaign) {
         if (sweep) fail(sweep->source(), "[sweep] needs a [campaign] section (at least a name)");

@@ -41,7 +41,10 @@ class Parser {
         file_ = path_.string();
     }
 
+    // The text given to the constructor, parsed; or a table made otherwise (parse_sweep of a
+    // tree: the constructor's text is then its TOML text, kept as the provenance).
     SweepFile run();
+    SweepFile run(const toml::table& root);
 
   private:
     [[noreturn]] void fail(const toml::source_region& where, const std::string& msg) const {
@@ -64,6 +67,10 @@ class Parser {
     engine::SceneParams build_scene(const std::vector<Given>& overrides,
                                     const std::string& context) const;
     Point make_point(const PointDraft& draft, int default_realizations) const;
+    // Every key under its canonical name, as given (the base values with `overrides` on top),
+    // else as `scene` has it: Point::parameters.
+    std::vector<core::Setting> parameters_of(const std::vector<Given>& overrides,
+                                             const engine::SceneParams& scene) const;
 
     std::string_view text_;
     std::filesystem::path path_;

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <stdexcept>
 
 #include "config/key_table.hpp"
@@ -51,6 +52,14 @@ SweepFile load_sweep(const fs::path& path) {
 
 SweepFile parse_sweep(std::string_view text, const fs::path& source_name) {
     return Parser(text, source_name).run();
+}
+
+SweepFile parse_sweep_tree(const nlohmann::json& tree, const fs::path& source_name) {
+    const toml::table root = table_from_tree(tree, display_name(source_name));
+    std::ostringstream text;  // the provenance: the TOML text of the same table
+    text << root;
+    const std::string t = text.str();
+    return Parser(t, source_name).run(root);
 }
 
 engine::SceneParams scene_at(const SweepFile& sweep, double D_cm, double theta_deg) {

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <optional>
+#include <variant>
+#include <vector>
 
 #include "config/key_table.hpp"
 #include "hopper/core/error.hpp"
@@ -165,6 +168,124 @@ toml::table parse_toml(std::string_view text, const std::string& file) {
             throw ConfigError(at + *msg);
         throw ConfigError(at + "TOML syntax error: " + std::string(e.description()));
     }
+}
+
+namespace {
+
+// As parse_toml's guard: a sweep file needs a handful of levels.
+constexpr int max_tree_depth = 64;
+
+void fill_table(toml::table& t, const nlohmann::json& object, const std::string& where, int depth,
+                const std::string& file);
+
+[[noreturn]] void tree_error(const std::string& file, const std::string& msg) {
+    throw ConfigError(file + ": " + msg);
+}
+
+// A TOML value of any kind (a variant, not a template: the recursion of arrays in arrays stays
+// one function).
+using TomlValue = std::variant<toml::table, toml::array, std::string, bool, std::int64_t, double>;
+
+// One value of the tree as the TOML value it stands for; `where` names it in messages
+// ("material.mu", "points[1].D_cm").
+TomlValue convert(const nlohmann::json& v, const std::string& where, int depth,
+                  const std::string& file) {
+    using Type = nlohmann::json::value_t;
+    if (depth > max_tree_depth)
+        tree_error(file, clip(where) + ": nested deeper than " + std::to_string(max_tree_depth) +
+                             " levels; a sweep file needs a few");
+    switch (v.type()) {
+        case Type::object: {
+            toml::table t;
+            fill_table(t, v, where, depth + 1, file);
+            return t;
+        }
+        case Type::array: {
+            toml::array a;
+            for (std::size_t i = 0; i < v.size(); ++i)
+                std::visit([&a](auto&& x) { a.push_back(std::move(x)); },
+                           convert(v[i], where + "[" + std::to_string(i) + "]", depth + 1, file));
+            return a;
+        }
+        case Type::string:
+            return v.get<std::string>();
+        case Type::boolean:
+            return v.get<bool>();
+        case Type::number_integer:
+            return v.get<std::int64_t>();
+        case Type::number_unsigned: {
+            const auto u = v.get<std::uint64_t>();
+            constexpr auto max_int = std::numeric_limits<std::int64_t>::max();
+            if (u > static_cast<std::uint64_t>(max_int))
+                tree_error(file, clip(where) + " = " + std::to_string(u) +
+                                     " is not a 64-bit integer (TOML integers are in [" +
+                                     std::to_string(std::numeric_limits<std::int64_t>::min()) +
+                                     ", " + std::to_string(max_int) + "])");
+            return static_cast<std::int64_t>(u);
+        }
+        case Type::number_float:
+            return v.get<double>();
+        case Type::null:
+            tree_error(file, clip(where) +
+                                 " has no value (None): a sweep file has none; leave the key out "
+                                 "for its default");
+        default:
+            tree_error(file, clip(where) + ": not a value a sweep file can hold");
+    }
+    return false;  // not reached
+}
+
+// The members of `object` into `t`; a key with dots is a dotted key, as in a TOML text
+// ("material.mu" = material = {mu = ...}).
+void fill_table(toml::table& t, const nlohmann::json& object, const std::string& where, int depth,
+                const std::string& file) {
+    for (const auto& [key, value] : object.items()) {
+        std::vector<std::string> parts;
+        for (std::size_t start = 0;;) {
+            const std::size_t dot = key.find('.', start);
+            parts.push_back(key.substr(start, dot - start));
+            if (dot == std::string::npos) break;
+            start = dot + 1;
+        }
+        std::string path = where;
+        toml::table* at = &t;
+        for (std::size_t i = 0; i < parts.size(); ++i) {
+            if (parts[i].empty())
+                tree_error(file, "key '" + clip(key) + "'" +
+                                     (where.empty() ? "" : " in " + clip(where)) +
+                                     " has an empty part between its dots");
+            path += (path.empty() ? "" : ".") + parts[i];
+            toml::node* existing = at->get(parts[i]);
+            const bool last = i + 1 == parts.size();
+            if (!last || value.is_object()) {
+                if (!existing) {
+                    at->insert(parts[i], toml::table{});
+                    existing = at->get(parts[i]);
+                }
+                if (!existing || !existing->is_table())
+                    tree_error(file, clip(path) + " is given twice: as a value and as a table");
+                at = existing->as_table();
+                if (last)
+                    fill_table(*at, value, path, depth + static_cast<int>(parts.size()), file);
+            } else {
+                if (existing) tree_error(file, clip(path) + " is given twice");
+                std::visit([&](auto&& x) { at->insert(parts[i], std::move(x)); },
+                           convert(value, path, depth + static_cast<int>(parts.size()), file));
+            }
+        }
+    }
+}
+
+}  // namespace
+
+toml::table table_from_tree(const nlohmann::json& tree, const std::string& file) {
+    if (!tree.is_object())
+        throw ConfigError(file +
+                          ": a scene is a table of sections ({\"hopper\": {...}, ...}), got " +
+                          std::string(tree.type_name()));
+    toml::table root;
+    fill_table(root, tree, "", 0, file);
+    return root;
 }
 
 }  // namespace hopper::config::detail

@@ -6,11 +6,13 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 
 #include "hopper/config/sanity.hpp"
+#include "hopper/config/scene_schema.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/core/error.hpp"
 #include "hopper/core/units.hpp"
@@ -1085,4 +1087,81 @@ material.mu = [0.5]
     EXPECT_EQ(std::get<double>(find_setting(p.parameters, "protocol.shake_direction_deg")->value) *
                   hopper::core::deg,
               p.scene.protocol.shake_direction);
+}
+
+// parse_sweep_tree: a tree of values (the Python module's dict scene, docs/usage.md "The engine
+// from Python"): the same SweepFile as the text with the same keys, and the same checks.
+TEST(SweepTree, GivesWhatTheSameTextGives) {
+    const SweepFile text = parse(R"(
+[hopper]
+width_cm = 10.0
+particles = 500
+theta_deg = 60
+[material]
+mu = 0.4
+[integrator]
+scheme = "gear4"
+contact_corrections = false
+[campaign]
+name = "t"
+seed = 7
+[sweep]
+D_cm = [2.5, 3]
+material.e_n = [0.8, 0.9]
+[[points]]
+D_cm = 4.0
+walls = { mu = 0.3 }
+)");
+    const auto tree = nlohmann::json::parse(R"({
+        "hopper": {"width_cm": 10.0, "particles": 500, "theta_deg": 60},
+        "material.mu": 0.4,
+        "integrator": {"scheme": "gear4", "contact_corrections": false},
+        "campaign": {"name": "t", "seed": 7},
+        "sweep": {"D_cm": [2.5, 3], "material.e_n": [0.8, 0.9]},
+        "points": [{"D_cm": 4.0, "walls": {"mu": 0.3}}]})");
+    const SweepFile from_tree = hopper::config::parse_sweep_tree(tree, "<dict>");
+    EXPECT_EQ(from_tree.path, fs::path("<dict>"));
+    EXPECT_THAT(from_tree.text, AllOf(HasSubstr("[integrator]"), HasSubstr("gear4")));  // as TOML
+    ASSERT_EQ(labels(from_tree.campaign), labels(text.campaign));
+    ASSERT_EQ(from_tree.campaign.points.size(), 5u);
+    for (std::size_t i = 0; i < text.campaign.points.size(); ++i) {
+        const Point& a = text.campaign.points[i];
+        const Point& b = from_tree.campaign.points[i];
+        EXPECT_EQ(hopper::config::scene_fingerprint(a.scene),
+                  hopper::config::scene_fingerprint(b.scene));
+        EXPECT_EQ(a.parameters, b.parameters);
+        EXPECT_EQ(derive_seed(7, a.settings, 3), derive_seed(7, b.settings, 3));
+    }
+    EXPECT_EQ(from_tree.base_parameters, text.base_parameters);
+    EXPECT_EQ(find_setting(text.base_parameters, "theta_deg")->value, (SettingValue(60.0)));
+    EXPECT_EQ(find_setting(text.base_parameters, "material.mu")->value, (SettingValue(0.4)));
+}
+
+TEST(SweepTree, BadValuesAreNamedByKey) {
+    const auto error_of_tree = [](const char* json) -> std::string {
+        try {
+            hopper::config::parse_sweep_tree(nlohmann::json::parse(json), "<dict>");
+        } catch (const ConfigError& e) {
+            return e.what();
+        }
+        return "<<no error was thrown>>";
+    };
+    // The parser's own messages, without a line number.
+    EXPECT_THAT(error_of_tree(R"({"material": {"mux": 0.5}})"),
+                AllOf(HasSubstr("<dict>: unknown key 'mux' in [material]"),
+                      HasSubstr("did you mean 'mu'")));
+    EXPECT_THAT(error_of_tree(R"({"hopper": {"particles": 2.5}})"),
+                HasSubstr("<dict>: hopper.particles = 2.5 has the wrong type"));
+    // What TOML cannot hold.
+    EXPECT_THAT(error_of_tree(R"({"protocol": {"max_time_s": null}})"),
+                HasSubstr("<dict>: protocol.max_time_s has no value"));
+    EXPECT_THAT(error_of_tree(R"({"campaign": {"name": "t", "seed": 9223372036854775808}})"),
+                AllOf(HasSubstr("campaign.seed = 9223372036854775808 is not a 64-bit integer"),
+                      HasSubstr("9223372036854775807]")));
+    EXPECT_THAT(error_of_tree(R"({"material": {"mu": 0.5}, "material.mu": 0.4})"),
+                HasSubstr("<dict>: material.mu is given twice"));
+    EXPECT_THAT(error_of_tree(R"({"material": 1, "material.mu": 0.4})"),
+                HasSubstr("material is given twice: as a value and as a table"));
+    EXPECT_THAT(error_of_tree(R"({"material..mu": 0.4})"), HasSubstr("empty part"));
+    EXPECT_THAT(error_of_tree(R"([1, 2])"), HasSubstr("a scene is a table of sections"));
 }

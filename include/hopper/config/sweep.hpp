@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -73,13 +74,22 @@ struct SweepFile {
     std::filesystem::path path;  // as given ("<string>" when parsed from text)
     std::string text;            // the file's full text (provenance)
     engine::SceneParams base;    // the scene sections, validated
-    bool has_campaign = false;   // a [campaign] section was present
-    CampaignSpec campaign;       // filled when has_campaign (points from [sweep]/[[points]])
+    // Every key of the scene sections as Point::parameters has it (as the file gave it, else the
+    // default in file units, converted back to the same bits): `hopper.D_cm` is "D_cm".
+    std::vector<core::Setting> base_parameters;
+    bool has_campaign = false;  // a [campaign] section was present
+    CampaignSpec campaign;      // filled when has_campaign (points from [sweep]/[[points]])
 };
 
 // Parses and validates. Throws core::ConfigError (file, key, value, allowed range).
 SweepFile load_sweep(const std::filesystem::path& path);
 SweepFile parse_sweep(std::string_view text, const std::filesystem::path& source_name);
+// The same from a tree of values instead of a text (the Python module's dict scene, docs/usage.md
+// "The engine from Python"): objects are tables, a key with dots a dotted key ("material.mu"),
+// and arrays, strings, integers (64-bit signed), floats and booleans what TOML has; null is
+// refused. The table goes through the same checks as a file's, and the messages name
+// `source_name` and the key (no line). `text` is the table written as TOML.
+SweepFile parse_sweep_tree(const nlohmann::json& tree, const std::filesystem::path& source_name);
 
 // The base scene with outlet D (cm) and wall angle theta (deg) set, validated.
 engine::SceneParams scene_at(const SweepFile& sweep, double D_cm, double theta_deg);
