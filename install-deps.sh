@@ -10,6 +10,7 @@ packages=(
   libgtest-dev googletest
   python3 python3-numpy python3-scipy python3-matplotlib python3-h5py python3-pandas python3-xarray
   python3-venv python3-setuptools python3-wheel  # pip install ./analysis (tests/install)
+  pybind11-dev python3-pybind11 python3-dev  # the Python module hopper_engine (docs/usage.md)
   slurm-wlm munge  # the local single-node Slurm of the `slurm` tests (slurm/slurm-up.sh)
 )
 

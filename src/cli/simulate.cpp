@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cli/result_output.hpp"
+#include "cli/scene_run.hpp"
 #include "cli/snapshot_writer.hpp"
 #include "hopper/campaign/plan.hpp"
 #include "hopper/campaign/report.hpp"
@@ -98,10 +99,14 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
                                     ", so there is nothing to rerun and compare with (`campaign "
                                     "status` lists what is done; `campaign run` stores it)");
     }
-    const engine::SceneParams scene =
-        stored ? stored->scene
-               : config::scene_at(config::load_sweep(opt.sweep), opt.D_cm, opt.theta_deg);
-    const std::uint64_t seed = stored ? stored->seed : opt.seed;
+    // The scene and seed, and what the output echoes: a stored realization's, or the sweep's base
+    // scene at --D and --theta as the Python module runs it too (scene_run.hpp).
+    const SceneRun run = stored
+                             ? SceneRun{stored->scene, RunRequest{stored->sweep_path, stored->D_cm,
+                                                                  stored->theta_deg, stored->seed}}
+                             : base_scene_run(config::load_sweep(opt.sweep), opt.sweep.string(),
+                                              opt.D_cm, opt.theta_deg, opt.seed);
+    const engine::SceneParams& scene = run.scene;
 
     engine::RunHooks hooks;
     // A failing snapshot write must not throw through the engine: remember it and stop the run.
@@ -170,13 +175,11 @@ int run_simulate(const SimulateOptions& opt, std::ostream& out, std::ostream& er
         };
     }
 
-    const engine::RealizationResult result = engine::run_realization(scene, seed, hooks);
+    const engine::RealizationResult result = run_scene(run, hooks);
     if (!snapshot_error.empty())
         throw std::runtime_error("snapshots stopped the run: " + snapshot_error);
 
-    const RunRequest req =
-        stored ? RunRequest{stored->sweep_path, stored->D_cm, stored->theta_deg, seed}
-               : RunRequest{opt.sweep.string(), opt.D_cm, opt.theta_deg, seed};
+    const RunRequest& req = run.request;
     if (opt.json) {
         out << result_json(req, result) << '\n';
     } else {

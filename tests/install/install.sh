@@ -9,6 +9,7 @@
 #   find_package(hopper 0.4), links hopper::engine and runs one tiny realization; the README's
 #   own find_package line is accepted by the installed version file, and it names the release's
 #   major.minor, as the example does;
+# - the Python module hopper_engine, where it was built, imports from P/lib/python3.X/*-packages;
 # - `pip install ./analysis` into a venv made with --system-site-packages (Debian's numpy,
 #   pandas, h5py, matplotlib; setuptools and wheel from Debian, no network) gives the package
 #   hopper_analysis and the hopper-plot command.
@@ -24,6 +25,19 @@ for f in bin/campaign include/hopper/engine/realization.hpp include/hopper/core/
          share/doc/hopper/CITATION.cff; do
     [ -e "$P/$f" ] || fail "cmake --install did not install $f"
 done
+
+# the Python module, where the build has it (pybind11 found): installed beside Python's packages
+# (docs/usage.md, "The engine from Python"), it imports from there and reads an installed sweep
+if compgen -G "$BUILD/src/python/hopper_engine.*.so" >/dev/null; then
+    site=$(ls -d "$P"/lib/python3*/*-packages 2>/dev/null | head -1)
+    [ -n "$site" ] && compgen -G "$site/hopper_engine.*.so" >/dev/null ||
+        fail "cmake --install did not install the Python module hopper_engine"
+    run_expect 0 pymodule env PYTHONPATH="$site" "$PY" -c \
+        'import sys, hopper_engine; print(hopper_engine.__file__, hopper_engine.points(sys.argv[1]))' \
+        "$P/share/hopper/campaigns/tiny.toml"
+    expect_in pymodule.out "$site/hopper_engine."
+    expect_in pymodule.out "'D_cm=3 theta_deg=60', 'D_cm=4.5 theta_deg=60'"
+fi
 
 # the release number, beside the commit
 run_expect 0 version "$P/bin/campaign" --version
