@@ -1,8 +1,8 @@
 #pragma once
 // Contact laws (docs/model.md, "Contact forces"). Each law is a small value type whose
-// evaluate() is pure and inline; the pair loops in system.cpp are templates over the law, so the
-// choice of law (frictionless / viscous friction / Cundall-Strack spring) is made once at setup
-// and never per contact.
+// evaluate() is pure and inline; the force pass (force_batch_impl.hpp) is a template over the
+// law, so the choice of law (frictionless / viscous friction / Cundall-Strack spring) is made
+// once at setup and never per contact.
 
 #include <algorithm>
 #include <cmath>
@@ -60,7 +60,7 @@ HOPPER_HOT_INLINE Vec2 normal_force(const ContactParams& p, double mbar, const V
     return normal_magnitude(p, mbar, overlap, v_n) * n;
 }
 
-// One contact in components, for the force loops (system.cpp, force_batch.hpp). The laws are
+// One contact in components, for the force pass (force_batch_impl.hpp). The laws are
 // written once, here, on plain doubles: every path (the reference loop and the batched scalar,
 // AVX2 and AVX-512 ones) evaluates the same operations in the same order, so all give the same
 // bits. Select = true evaluates both sides of the Coulomb cap and picks (no branch: SIMD

@@ -25,7 +25,8 @@ struct ForceArgs;
 }
 
 // Which implementation of the force pass runs (issue 12). Every path gives the same bits:
-// `reference` is the plain loop over the neighbour list; the batched paths pack the touching
+// `reference` is the force pass of force_batch_impl.hpp with one lane (each contact evaluated
+// where it is found); the batched paths, the same pass with several lanes, pack the touching
 // pairs and evaluate the contact law in SIMD registers of the named instruction set; `automatic`
 // takes the path measured fastest (force_batch.cpp: the reference on the machines measured).
 enum class KernelPath { automatic, reference, baseline, avx2, avx512 };
