@@ -16,11 +16,12 @@
 #                    ANALYZE_MAX: it holds every decoded result in memory, 16 kB each)
 #   export           campaign export STORE --csv DIR (skipped above EXPORT_MAX realizations)
 #   open_store       Python: open_store(STORE) and its points, realizations and survival tables
+#                    (skipped above OPEN_MAX)
 #
 # usage: bench/scale.sh [N ...]          (default: 1000 10000 100000)
 # env:   BUILD=build  OUT=/tmp/hopper-scale  PER_POINT=100  THREADS=8  REPEATS=3
 #        RUN_REPEATS=REPEATS (the run is the slow one)  EXPORT_MAX=100000  ANALYZE_MAX=100000
-#        KEEP=0 (1: keep the stores)
+#        OPEN_MAX=1000000  KEEP=0 (1: keep the stores)
 # Writes OUT/scale.csv (one row per operation, size and repeat: wall time, CPU time = user +
 # system of the process and its children, max RSS, the load average) and prints the table of
 # medians with the growth exponent of each operation (bench/scale_table.py; --png draws the
@@ -37,6 +38,7 @@ REPEATS=${REPEATS:-3}
 RUN_REPEATS=${RUN_REPEATS:-$REPEATS}
 EXPORT_MAX=${EXPORT_MAX:-100000}
 ANALYZE_MAX=${ANALYZE_MAX:-100000}
+OPEN_MAX=${OPEN_MAX:-1000000}
 KEEP=${KEEP:-0}
 bench=$BUILD/bench/bench_dispatch
 campaign=$BUILD/src/cli/campaign
@@ -124,9 +126,12 @@ for n in "${sizes[@]}"; do
         done
         rm -rf "$dir/csv"
     fi
-    for ((r = 1; r <= REPEATS; r++)); do
-        measure open_store "$n" "$p" "$r" /usr/bin/python3 -c "$open_store_py" "$dir/dispatch.h5"
-    done
+    if [ "$n" -le "$OPEN_MAX" ]; then
+        for ((r = 1; r <= REPEATS; r++)); do
+            measure open_store "$n" "$p" "$r" /usr/bin/python3 -c "$open_store_py" \
+                "$dir/dispatch.h5"
+        done
+    fi
     # Last, on the store itself (no copy: a 10^6 store's journal is 6.6 GB): torn, resumed,
     # whole again, torn again.
     for ((r = 1; r <= REPEATS; r++)); do
