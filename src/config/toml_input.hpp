@@ -4,8 +4,8 @@
 // tree of values (the Python module's dict scene), and how a TOML node is described in messages.
 // The only header that includes toml++.
 
-#include <nlohmann/json_fwd.hpp>
 #include <toml++/toml.h>
+#include <nlohmann/json_fwd.hpp>
 
 #include <string>
 #include <string_view>
