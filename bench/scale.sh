@@ -13,7 +13,7 @@
 #                    missing realization run
 #   status           campaign status STORE
 #   analyze          campaign analyze STORE (tables, /analysis written; skipped above
-#                    ANALYZE_MAX: it holds every decoded result in memory, 16 kB each)
+#                    ANALYZE_MAX: about 2.7 kB per realization of what the statistics read)
 #   export           campaign export STORE --csv DIR (skipped above EXPORT_MAX realizations)
 #   open_store       Python: open_store(STORE) and its points, realizations and survival tables
 #                    (skipped above OPEN_MAX)

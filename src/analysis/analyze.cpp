@@ -181,6 +181,20 @@ AnalysisPointInput in_realization_order(AnalysisPointInput in) {
     return out;
 }
 
+void keep_what_analysis_reads(engine::RealizationResult& r) {
+    const auto drop = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+    drop(r.exit_times);
+    drop(r.curve_time);
+    drop(r.curve_count);
+    drop(r.shakes_per_jam);
+    drop(r.message);
+    for (auto& a : r.arches) {
+        drop(a.x);
+        drop(a.y);
+    }
+    r.diagnostics = engine::Diagnostics{};
+}
+
 namespace {
 
 // Issue 16: points pooled with --allow-mixed can differ in settings their labels do not show.

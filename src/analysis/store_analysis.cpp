@@ -37,15 +37,20 @@ StoreInputs read_inputs(const fs::path& store) {
         in.planned = p.realizations();
         out.points.push_back(std::move(in));
     }
-    // Each result with its realization index: analyze_points orders by it, so nothing depends
-    // on the order the journal holds them in.
-    for (auto& r : store::read_journal_realizations(store)) {
+    // Each result with its realization index, reduced to what the statistics read as it comes
+    // (one decoded result at a time in memory), then each point in realization order:
+    // analyze_points uses that order, so nothing depends on the order the journal holds them in,
+    // and it finds them ordered (no copy of a point's results).
+    store::for_each_journal_realization(store, [&](store::StoredRealization&& r) {
         const auto it = index.find(r.label);
-        if (it == index.end()) continue;
+        if (it == index.end()) return;
         auto& in = out.points[it->second];
+        keep_what_analysis_reads(r.result);
         in.results.push_back(std::move(r.result));
         in.realizations.push_back(r.record.realization);
-    }
+    });
+    for (auto& in : out.points)
+        in = in_realization_order(std::move(in));
     return out;
 }
 

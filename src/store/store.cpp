@@ -503,12 +503,12 @@ std::vector<StoredRealization> read_realizations(const fs::path& store) {
     return layout::read_realizations(store);
 }
 
-std::vector<StoredRealization> read_journal_realizations(const fs::path& store) {
+void for_each_journal_realization(const fs::path& store,
+                                  const std::function<void(StoredRealization&&)>& visit) {
     State state;
-    std::vector<StoredRealization> out;
     struct Sink : ReplaySink {
-        std::vector<StoredRealization>& out;
-        explicit Sink(std::vector<StoredRealization>& o) : out(o) {}
+        const std::function<void(StoredRealization&&)>& visit;
+        explicit Sink(const std::function<void(StoredRealization&&)>& v) : visit(v) {}
         void result(const State&, int point, std::int64_t, const ResultRecord& rec,
                     const engine::RealizationResult& r) override {
             StoredRealization s;
@@ -517,13 +517,18 @@ std::vector<StoredRealization> read_journal_realizations(const fs::path& store) 
             s.record = rec;
             s.record.result.clear();
             s.result = r;
-            out.push_back(std::move(s));
+            visit(std::move(s));
         }
-    } sink(out);
+    } sink(visit);
     scan_journal(journal_path(store),
                  [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
                      apply_record(state, t, off, p, &sink);
                  });
+}
+
+std::vector<StoredRealization> read_journal_realizations(const fs::path& store) {
+    std::vector<StoredRealization> out;
+    for_each_journal_realization(store, [&](StoredRealization&& s) { out.push_back(std::move(s)); });
     return out;
 }
 

@@ -595,6 +595,61 @@ TEST(AnalyzeOrder, JsonIsTheSameWhateverOrderTheRealizationsWereStoredIn) {
     EXPECT_EQ(a.points[0].rate.mean, b.points[0].rate.mean);
 }
 
+// What read_inputs drops from each result as it reads a store (keep_what_analysis_reads, issue
+// 44) changes nothing: the same realizations with everything filled in (exit times, curves,
+// events with restarts, arches with centres, diagnostics, a message) give the same JSON, slimmed
+// or whole. The fixture's events and arches take part: dropping them does change it.
+TEST(AnalyzeSlim, WhatTheAnalysisDoesNotReadIsDroppedWithoutChangingABit) {
+    auto rs = varied_realizations(12);
+    for (std::size_t i = 0; i < rs.size(); ++i) {
+        auto& r = rs[i];
+        double at = 0.0;
+        for (std::size_t k = 0; k < r.survival_times.size(); ++k) {
+            at += r.survival_times[k];
+            r.avalanche_sizes.push_back(static_cast<int>(10 + 7 * k + i));
+            r.exit_times.push_back(at);
+            r.curve_time.push_back(at);
+            r.curve_count.push_back(static_cast<int>(100 - k));
+            if (!r.censored[k]) {
+                // The flow restarts a while after each onset: the early/late test's input.
+                r.events.push_back({engine::Event::Kind::jam, at, at, 50});
+                r.events.push_back(
+                    {engine::Event::Kind::flow_restart, at + 0.05 * double(1 + i % 3), at, 50});
+                engine::Arch a;
+                for (std::size_t d = 0; d < 3 + i % 3; ++d) {
+                    a.ids.push_back(static_cast<int>(d));
+                    a.x.push_back(0.001 * double(d));
+                    a.y.push_back(0.002);
+                }
+                a.span = 0.02 + 0.001 * double(i);
+                a.max_angle = 2.5;
+                r.arches.push_back(a);
+            }
+        }
+        r.message = "a message the analysis does not show";
+        r.diagnostics.steps = 1000 + static_cast<std::int64_t>(i);
+        r.diagnostics.force_path = "reference";
+    }
+    auto slim = rs;
+    for (auto& r : slim)
+        keep_what_analysis_reads(r);
+    EXPECT_TRUE(slim[1].exit_times.empty() && slim[1].curve_time.empty() &&
+                slim[1].arches.at(0).x.empty() && slim[1].diagnostics.steps == 0);
+    const auto json = [](std::vector<RealizationResult> r) {
+        return analysis_json(analyze_points({point(3.0, 60, std::move(r))}), "s.h5", "c");
+    };
+    const std::string whole = json(rs);
+    EXPECT_EQ(json(slim), whole);
+    // Teeth: the fixture's events (the early/late test) and arches (sizes, spans) are read.
+    auto no_events = slim, no_arches = slim;
+    for (auto& r : no_events)
+        r.events.clear();
+    for (auto& r : no_arches)
+        r.arches.clear();
+    EXPECT_NE(json(no_events), whole);
+    EXPECT_NE(json(no_arches), whole);
+}
+
 // The same through the store: two stores at the same path, filled in two orders, give the same
 // `campaign analyze --json` text.
 TEST(AnalyzeOrder, StoresFilledInDifferentOrdersAnalyseByteForByteTheSame) {

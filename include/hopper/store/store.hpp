@@ -131,6 +131,11 @@ struct StoredRealization {
 std::vector<StoredRealization> read_realizations(const std::filesystem::path& store);
 // From the journal (same order).
 std::vector<StoredRealization> read_journal_realizations(const std::filesystem::path& store);
+// The same realizations handed to `visit` one at a time as the journal is read (same order,
+// same content), so that a reader that reduces each one as it comes (campaign analyze) holds
+// one decoded result at a time instead of the whole campaign's (issue 44).
+void for_each_journal_realization(const std::filesystem::path& store,
+                                  const std::function<void(StoredRealization&&)>& visit);
 
 // A reader's view of a store as it stands (docs/store.md, "Reading a store during a run"): the
 // journal's complete records copied to `out`'s journal and the HDF5 file `out` written from them
