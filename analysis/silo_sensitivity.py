@@ -2,11 +2,13 @@
 """The flat silo's sensitivity map (issue 39, docs/validation.md "Sensitivity"): each lever's
 effect on ln(<s>+1) per outlet and on the slope b.
 
-usage: silo_sensitivity.py STORE.h5 [STORE.h5 ...] [--baseline JSON_OR_STORE] [--json F] [--md F]
+usage: silo_sensitivity.py STORE.h5[@LEVER] [...] [--baseline JSON_OR_STORE] [--json F] [--md F]
                            [--png F]
 
 Every point of the stores is one lever setting at one outlet: its lever is the point's label
-less the outlet and the angle (`material.mu_r=0.1`; a point with nothing else is "baseline").
+less the outlet and the angle (`material.mu_r=0.1`; a point with nothing else is "baseline");
+STORE.h5@LEVER puts LEVER before every point's own (a store whose campaign-wide settings differ
+from the baseline's, which its labels do not show: `width.h5@hopper.width_cm=38.5`).
 Per point, as silo_validation.py (whose estimator this reuses): the steady avalanches (each
 realization's first, from the settled fill, left out), <s> = grains / clogs with its standard
 error <s>/sqrt(clogs), y = ln(<s>+1) with sigma_y = se / (<s>+1), worker core-hours. Against the
@@ -30,11 +32,20 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BASELINE = os.path.join(HERE, "..", "docs", "figures", "silo_validation.json")
 
 
-def lever_of(label):
+def lever_of(label, common=""):
     """The label less its outlet and angle: 'D_cm=2.695 theta_deg=0 material.mu=0.2' ->
-    'material.mu=0.2'; nothing left -> 'baseline'."""
+    'material.mu=0.2'; nothing left -> 'baseline'. `common` names what a store sets for all its
+    points (a campaign-wide setting such as the silo's width, which no label shows): it comes
+    first, and the point is no longer the baseline."""
     rest = [t for t in label.split() if not re.match(r"^(D_cm|theta_deg)=", t)]
-    return " ".join(rest) or "baseline"
+    return " ".join(common.split() + rest) or "baseline"
+
+
+def store_and_lever(arg):
+    """'STORE.h5@hopper.width_cm=38.5 hopper.particles=1600' -> (path, common lever); a plain
+    path -> (path, '')."""
+    path, _, common = arg.partition("@")
+    return path, common.strip()
 
 
 def with_log(row):
@@ -44,7 +55,7 @@ def with_log(row):
     return row
 
 
-def rows_of(path):
+def rows_of(path, common=""):
     with open_store(path) as s:
         rows = summarize_store(s, path, skip_first=True)
         r = s.realizations
@@ -52,7 +63,7 @@ def rows_of(path):
         for i, pt in s.points.iterrows():
             hours[pt["label"]] = float(r[r["point"] == i]["task_seconds"].sum()) / 3600
     for row in rows:
-        row["lever"] = lever_of(row["label"])
+        row["lever"] = lever_of(row["label"], common)
         row["core_hours"] = hours.get(row["label"], 0.0)
         row.pop("first_by_seed", None)
         with_log(row)
@@ -199,10 +210,11 @@ def main():
     ap.add_argument("--md")
     ap.add_argument("--png", help="the figure: ln(<s>+1) against (D/d)^2 per lever family")
     a = ap.parse_args()
-    for p in a.stores:
+    stores = [store_and_lever(p) for p in a.stores]
+    for p, _ in stores:
         if not os.path.exists(p):
             sys.exit("silo_sensitivity.py: no store %s" % p)
-    rows = [r for p in a.stores for r in rows_of(p)]
+    rows = [r for p, common in stores for r in rows_of(p, common)]
     base = baseline_rows(a.baseline, rows)
     rows = compare(rows, base)
     fits = lever_fits(rows)

@@ -27,6 +27,13 @@ check(ss.lever_of("D_cm=2.695 theta_deg=0 material.mu_r=0.1") == "material.mu_r=
 check(ss.lever_of("D_cm=2.31 theta_deg=0 material.e_n=0.05 walls.e_n=0.05")
       == "material.e_n=0.05 walls.e_n=0.05", "two-key lever")
 check(ss.lever_of("D_cm=2.31 theta_deg=0") == "baseline", "no lever: baseline")
+check(ss.lever_of("D_cm=2.31 theta_deg=0", "hopper.width_cm=38.5") == "hopper.width_cm=38.5",
+      "a store-wide lever")
+check(ss.lever_of("D_cm=2.31 theta_deg=0 material.mu=0.2", "hopper.width_cm=38.5")
+      == "hopper.width_cm=38.5 material.mu=0.2", "a store-wide lever before the point's")
+check(ss.store_and_lever("w.h5@hopper.width_cm=38.5 hopper.particles=1600")
+      == ("w.h5", "hopper.width_cm=38.5 hopper.particles=1600"), "STORE@LEVER")
+check(ss.store_and_lever("w.h5") == ("w.h5", ""), "a plain store")
 
 # <s> = 99 +- 9.9 (100 clogs): y = ln 100 = 4.60517, sigma = 9.9/100 = 0.099.
 # Baseline at the same outlet: <s> = 332.5 +- 34 -> y = ln 333.5 = 5.80964, sigma = 34/333.5.
