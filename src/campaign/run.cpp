@@ -191,110 +191,116 @@ struct MasterState {
     int silent_workers = 0;    // workers still silent at the end (hung or stopped)
 };
 
-// The master's whole part: store, plan check, dispatch, summary. Returns the exit code.
-int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
-               std::vector<std::string> hosts, int mpi_size, MasterState* state, std::ostream& out,
-               std::ostream& err) {
-    const auto& spec = c.sweep.campaign;
-    const fs::path store_path = opt.store ? *opt.store : spec.store;
-    SignalWatcher signals;
-    // Before the store is touched: a deadline that cannot be known is an error.
+// ----- the master's part, step by step (run_master below reads as their sequence) -----------
+
+// Before the store is touched: a deadline that cannot be known is an error, and one already
+// past starts nothing (issue 29, item 4).
+std::optional<double> checked_deadline(const RunOptions& opt, std::ostream& err) {
     const std::optional<double> deadline = opt.deadline ? opt.deadline(err) : std::nullopt;
-    // A deadline already past: nothing could end before it (issue 29, item 4).
     if (deadline && *deadline <= store::unix_now())
         throw core::ConfigError("the deadline has already passed (" +
                                 format_duration(store::unix_now() - *deadline) +
                                 " ago): no realization is started; give a later --deadline");
-    store::StoreOptions store_options = opt.store_options;
-    if (!store_options.point_parameters) store_options.point_parameters = point_parameter_columns;
-    store::Store st(store_path, std::move(store_options));
-    for (const auto& n : st.notes())
+    return deadline;
+}
+
+store::StoreOptions store_options_of(const RunOptions& opt) {
+    store::StoreOptions o = opt.store_options;
+    if (!o.point_parameters) o.point_parameters = point_parameter_columns;
+    return o;
+}
+
+// A resumed store against the sweep: incompatible physics throws (check_compatible), points
+// that differ in unvaried settings need --allow-mixed, another code version is noted.
+void check_resume(const store::Store& st, const store::CampaignPlan& plan, const RunOptions& opt,
+                  std::ostream& err) {
+    // Typed settings restored for old points (a copy only where some lack them: the plan of
+    // 10^5 points is large).
+    std::optional<store::CampaignPlan> restored;
+    if (std::any_of(st.plan().points.begin(), st.plan().points.end(),
+                    [](const auto& p) { return p.settings.empty() || p.parameters.empty(); })) {
+        restored = st.plan();
+        restore_settings(*restored, st.status().runs);
+    }
+    const store::CampaignPlan& stored = restored ? *restored : st.plan();
+    for (const auto& n : check_compatible(stored, plan))
         err << "campaign: note: " << n << '\n';
-
-    store::CampaignPlan plan = make_plan(spec);
-    std::vector<std::uint64_t> physics;  // per point of the sweep
-    for (const auto& p : plan.points)
-        physics.push_back(p.physics_hash());
-    const bool resumed = !st.is_new();
-    if (resumed) {
-        // Typed settings restored for old points (a copy only where some lack them: the plan of
-        // 10^5 points is large).
-        std::optional<store::CampaignPlan> restored;
-        if (std::any_of(st.plan().points.begin(), st.plan().points.end(),
-                        [](const auto& p) { return p.settings.empty() || p.parameters.empty(); })) {
-            restored = st.plan();
-            restore_settings(*restored, st.status().runs);
-        }
-        const store::CampaignPlan& stored = restored ? *restored : st.plan();
-        for (const auto& n : check_compatible(stored, plan))
-            err << "campaign: note: " << n << '\n';
-        if (const auto mixed = mixed_settings(stored, plan); !mixed.empty()) {
-            if (!opt.allow_mixed)
-                throw core::ConfigError(
-                    "the sweep adds points whose settings, not varied by the sweep, differ "
-                    "from points already in the store:" +
-                    describe(mixed) +
-                    "\n  Fits would pool different physics. Use another --store, vary the "
-                    "setting in the sweep so that labels tell the points apart, or pass "
-                    "--allow-mixed (the Python figures then group by every differing setting).");
-            err << "campaign: note: --allow-mixed: new points differ from stored ones in"
-                << describe(mixed) << '\n';
-        }
-        const auto status = st.status();
-        if (!status.runs.empty() && status.runs.back().info.code_version != opt.code_version)
-            err << "campaign: note: the store's last run used code version "
-                << status.runs.back().info.code_version << "; this is " << opt.code_version
-                << " (results are compared per realization only within one version)\n";
+    if (const auto mixed = mixed_settings(stored, plan); !mixed.empty()) {
+        if (!opt.allow_mixed)
+            throw core::ConfigError(
+                "the sweep adds points whose settings, not varied by the sweep, differ "
+                "from points already in the store:" +
+                describe(mixed) +
+                "\n  Fits would pool different physics. Use another --store, vary the "
+                "setting in the sweep so that labels tell the points apart, or pass "
+                "--allow-mixed (the Python figures then group by every differing setting).");
+        err << "campaign: note: --allow-mixed: new points differ from stored ones in"
+            << describe(mixed) << '\n';
     }
+    const auto status = st.status();
+    if (!status.runs.empty() && status.runs.back().info.code_version != opt.code_version)
+        err << "campaign: note: the store's last run used code version "
+            << status.runs.back().info.code_version << "; this is " << opt.code_version
+            << " (results are compared per realization only within one version)\n";
+}
 
-    {
-        store::RunStartRecord start;
-        start.run.start_time = store::utc_now();
-        start.run.code_version = opt.code_version;
-        start.run.compiler = compiler_id();
-        start.run.command = opt.command_line;
-        start.run.sweep_path = c.sweep.path.string();
-        start.run.sweep_text = c.sweep.text;
-        start.run.mpi_size = mpi_size;
-        start.run.workers = channel.workers();
-        start.run.hosts = std::move(hosts);
-        start.run.pid = static_cast<std::int64_t>(getpid());
-        // What the sweep adds to the store's plan (all of it for a new store): a resume records
-        // its new points and realizations, not the whole plan again (issue 29).
-        start.plan = resumed ? plan_additions(st.plan(), std::move(plan)) : std::move(plan);
-        st.begin_run(std::move(start));
-    }
+// The run's start record: who runs what where, and what the sweep adds to the store's plan (all
+// of it for a new store; a resume records its new points and realizations, not the whole plan
+// again: issue 29).
+void begin_run(store::Store& st, const RunOptions& opt, const Campaign& c, store::CampaignPlan plan,
+               bool resumed, std::vector<std::string> hosts, int mpi_size, int workers) {
+    store::RunStartRecord start;
+    start.run.start_time = store::utc_now();
+    start.run.code_version = opt.code_version;
+    start.run.compiler = compiler_id();
+    start.run.command = opt.command_line;
+    start.run.sweep_path = c.sweep.path.string();
+    start.run.sweep_text = c.sweep.text;
+    start.run.mpi_size = mpi_size;
+    start.run.workers = workers;
+    start.run.hosts = std::move(hosts);
+    start.run.pid = static_cast<std::int64_t>(getpid());
+    start.plan = resumed ? plan_additions(st.plan(), std::move(plan)) : std::move(plan);
+    st.begin_run(std::move(start));
+}
 
-    // What to run: the sweep's tasks with no result yet (pending, or left in error), the most
-    // expensive first (ties in task order).
-    std::vector<double> cost(spec.points.size());
-    for (std::size_t p = 0; p < spec.points.size(); ++p)
-        cost[p] = expected_cost(spec.points[p].scene);
-    // The realizations planned so far per point: all of them, or with a target those the rounds
-    // allotted (the store's plan; run_rounds extends it), never max_realizations (issue 29).
+// The realizations planned so far per point: all of them, or with a target those the rounds
+// allotted (the store's plan; run_rounds extends it), never max_realizations (issue 29).
+std::vector<int> planned_realizations(const Campaign& c, const store::Store& st) {
+    const auto& spec = c.sweep.campaign;
     std::vector<int> planned(spec.points.size());
-    {
-        const auto have = allotments(st.plan());
-        for (std::size_t p = 0; p < spec.points.size(); ++p) {
-            planned[p] = c.tasks.realizations(static_cast<int>(p));
-            if (spec.target) {
-                const auto it = have.find(spec.points[p].label);
-                planned[p] = std::min(planned[p], it == have.end() ? 0 : it->second);
-            }
+    const auto have = allotments(st.plan());
+    for (std::size_t p = 0; p < spec.points.size(); ++p) {
+        planned[p] = c.tasks.realizations(static_cast<int>(p));
+        if (spec.target) {
+            const auto it = have.find(spec.points[p].label);
+            planned[p] = std::min(planned[p], it == have.end() ? 0 : it->second);
         }
     }
+    return planned;
+}
+
+bool has_result(const store::Store& st, const std::string& label, int r) {
+    const store::TaskEntry* e = st.task(label, r);
+    return e && (e->state == store::TaskState::done || e->state == store::TaskState::failed);
+}
+
+// What to run: the planned tasks with no result yet (pending, or left in error), the most
+// expensive first (ties in task order); none with a target (the rounds decide). `totals`
+// counts the planned and the stored.
+std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
+                                  const std::vector<int>& planned, const std::vector<double>& cost,
+                                  const std::vector<std::uint64_t>& physics, Totals& totals) {
+    const auto& spec = c.sweep.campaign;
     std::vector<TaskRef> todo;
     std::vector<std::size_t> point_of;  // todo's points, for the order
-    Totals totals;
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
         const auto& label = spec.points[p].label;
         totals.total += planned[p];
         for (int r = 0; r < planned[p]; ++r) {
-            const store::TaskEntry* e = st.task(label, r);
-            const store::TaskState s = e ? e->state : store::TaskState::pending;
-            if (s == store::TaskState::done || s == store::TaskState::failed) {
+            if (has_result(st, label, r)) {
                 ++totals.finished;
-                if (s == store::TaskState::failed) ++totals.failed;
+                if (st.task(label, r)->state == store::TaskState::failed) ++totals.failed;
                 continue;
             }
             if (spec.target) continue;  // the rounds decide what runs (run_rounds)
@@ -304,18 +310,21 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
             point_of.push_back(p);
         }
     }
-    {
-        std::vector<std::size_t> order(todo.size());
-        std::iota(order.begin(), order.end(), std::size_t{0});
-        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-            return cost[point_of[a]] > cost[point_of[b]];
-        });
-        std::vector<TaskRef> sorted;
-        sorted.reserve(todo.size());
-        for (const std::size_t i : order)
-            sorted.push_back(std::move(todo[i]));
-        todo = std::move(sorted);
-    }
+    std::vector<std::size_t> order(todo.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return cost[point_of[a]] > cost[point_of[b]];
+    });
+    std::vector<TaskRef> sorted;
+    sorted.reserve(todo.size());
+    for (const std::size_t i : order)
+        sorted.push_back(std::move(todo[i]));
+    return sorted;
+}
+
+void announce(std::ostream& err, const fs::path& store_path, bool resumed, const Campaign& c,
+              const Totals& totals, std::size_t to_run, int workers) {
+    const auto& spec = c.sweep.campaign;
     err << "campaign: store " << store_path.string() << (resumed ? " (resumed)" : " (new)") << ": "
         << totals.total
         << (spec.target ? " realizations allotted so far (rounds, up to max_realizations = " +
@@ -326,48 +335,88 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     if (spec.target)
         err << "; the rounds decide what runs on ";
     else
-        err << ", " << todo.size() << " to run on ";
-    err << channel.workers() << " worker" << (channel.workers() == 1 ? "" : "s") << std::endl;
+        err << ", " << to_run << " to run on ";
+    err << workers << " worker" << (workers == 1 ? "" : "s") << std::endl;
+}
+
+// The store's checkpoint directory, without the files a crash left between storing a result
+// and removing its checkpoint.
+void open_checkpoints(CheckpointFiles& files, const Campaign& c, const store::Store& st,
+                      const std::vector<int>& planned) {
+    const auto& spec = c.sweep.campaign;
+    for (std::size_t p = 0; p < spec.points.size(); ++p)
+        for (int r = 0; r < planned[p]; ++r) {
+            const auto& label = spec.points[p].label;
+            if (has_result(st, label, r))
+                files.remove(CheckpointKey{label, r, c.tasks.at(static_cast<int>(p), r).seed, 0});
+        }
+    files.remove_dir_if_empty();
+}
+
+// The cost model's correction from what this campaign measured so far (every run).
+void measured_cost(MasterOptions& mo, const Campaign& c, const store::Store& st,
+                   const std::vector<double>& cost) {
+    const auto& spec = c.sweep.campaign;
+    const store::StoreStatus before = st.status();
+    std::map<std::string_view, std::size_t> index;  // not a scan per point: 10^5 points
+    for (std::size_t p = 0; p < spec.points.size(); ++p)
+        index.emplace(spec.points[p].label, p);
+    for (const auto& ps : before.points)
+        if (const auto it = index.find(ps.label); it != index.end() && ps.timed > 0) {
+            mo.measured_seconds += ps.task_seconds;
+            mo.measured_expected += ps.timed * expected_seconds(cost[it->second]);
+        }
+}
+
+void announce_deadline(std::ostream& err, const MasterOptions& mo) {
+    err << "campaign: deadline " << format_duration(*mo.deadline - store::unix_now())
+        << " from now (grace " << format_duration(mo.grace) << "): realizations expected to "
+        << "end later are not started (cost model x "
+        << (mo.measured_expected > 0 ? mo.measured_seconds / mo.measured_expected : 1.0)
+        << ", measured on "
+        << (mo.measured_expected > 0 ? "the stored realizations" : "nothing yet") << ")"
+        << std::endl;
+}
+
+// The master's whole part: store, plan check, dispatch, summary. Returns the exit code.
+int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
+               std::vector<std::string> hosts, int mpi_size, MasterState* state, std::ostream& out,
+               std::ostream& err) {
+    const auto& spec = c.sweep.campaign;
+    const fs::path store_path = opt.store ? *opt.store : spec.store;
+    SignalWatcher signals;
+    const std::optional<double> deadline = checked_deadline(opt, err);
+    store::Store st(store_path, store_options_of(opt));
+    for (const auto& n : st.notes())
+        err << "campaign: note: " << n << '\n';
+
+    store::CampaignPlan plan = make_plan(spec);
+    std::vector<std::uint64_t> physics;  // per point of the sweep
+    for (const auto& p : plan.points)
+        physics.push_back(p.physics_hash());
+    const bool resumed = !st.is_new();
+    if (resumed) check_resume(st, plan, opt, err);
+    begin_run(st, opt, c, std::move(plan), resumed, std::move(hosts), mpi_size, channel.workers());
+
+    std::vector<double> cost(spec.points.size());
+    for (std::size_t p = 0; p < spec.points.size(); ++p)
+        cost[p] = expected_cost(spec.points[p].scene);
+    const std::vector<int> planned = planned_realizations(c, st);
+    Totals totals;
+    const std::vector<TaskRef> todo = tasks_to_run(c, st, planned, cost, physics, totals);
+    announce(err, store_path, resumed, c, totals, todo.size(), channel.workers());
 
     MasterOptions mo = opt.master;
     std::optional<CheckpointFiles> checkpoints;
     if (opt.checkpoints) {
         checkpoints.emplace(store_path, opt.code_version);
+        open_checkpoints(*checkpoints, c, st, planned);
         mo.checkpoints = &*checkpoints;
-        // A checkpoint left by a crash between storing a result and removing its file.
-        for (std::size_t p = 0; p < spec.points.size(); ++p)
-            for (int r = 0; r < planned[p]; ++r) {
-                const auto& label = spec.points[p].label;
-                const store::TaskEntry* e = st.task(label, r);
-                if (e &&
-                    (e->state == store::TaskState::done || e->state == store::TaskState::failed))
-                    checkpoints->remove(
-                        CheckpointKey{label, r, c.tasks.at(static_cast<int>(p), r).seed, 0});
-            }
-        checkpoints->remove_dir_if_empty();
     }
     mo.running_file = running_path(store_path);
     mo.deadline = deadline;
-    // The cost model's correction from what this campaign measured so far (every run).
-    if (resumed) {
-        const store::StoreStatus before = st.status();
-        std::map<std::string_view, std::size_t> index;  // not a scan per point: 10^5 points
-        for (std::size_t p = 0; p < spec.points.size(); ++p)
-            index.emplace(spec.points[p].label, p);
-        for (const auto& ps : before.points)
-            if (const auto it = index.find(ps.label); it != index.end() && ps.timed > 0) {
-                mo.measured_seconds += ps.task_seconds;
-                mo.measured_expected += ps.timed * expected_seconds(cost[it->second]);
-            }
-    }
-    if (mo.deadline)
-        err << "campaign: deadline " << format_duration(*mo.deadline - store::unix_now())
-            << " from now (grace " << format_duration(mo.grace) << "): realizations expected to "
-            << "end later are not started (cost model x "
-            << (mo.measured_expected > 0 ? mo.measured_seconds / mo.measured_expected : 1.0)
-            << ", measured on "
-            << (mo.measured_expected > 0 ? "the stored realizations" : "nothing yet") << ")"
-            << std::endl;
+    if (resumed) measured_cost(mo, c, st, cost);
+    if (mo.deadline) announce_deadline(err, mo);
 
     state->dispatching = true;
     Master master(channel, st, signals, mo, err);
@@ -384,6 +433,50 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     return finish_run(st, spec, c.tasks, rep,
                       RunEndContext{store_path, resume, totals.total, spec.target.has_value()}, out,
                       err);
+}
+
+// With a target, what the run would do now per point: its rounds replayed from the stored
+// results (as `campaign run` and `campaign status` do), not the store's plan, which a journal
+// written before issue 29 fills with every seed up to max_realizations.
+std::vector<int> missing_in_round(const config::CampaignSpec& spec, const fs::path& store_path,
+                                  bool existing) {
+    std::vector<int> missing(spec.points.size(), 0);
+    std::map<std::string, PointResults> results;
+    if (existing)
+        for (auto& r : store::read_journal_realizations(store_path))
+            results[r.label][r.record.realization] = std::move(r.result);
+    std::vector<double> expected;
+    for (const auto& pt : spec.points)
+        expected.push_back(expected_cost(pt.scene));
+    const RoundState rounds = replay_rounds(spec, results, expected);
+    if (!rounds.finished)
+        for (const auto& [p, i] : rounds.missing)
+            ++missing[std::size_t(p)];
+    return missing;
+}
+
+// The dry run's last lines: what 'to run' means with a target, the cost model's basis (seconds
+// per particle-step measured on the store, or the prior), the wall time on the workers.
+void dry_run_basis(std::ostream& out, const config::CampaignSpec& spec,
+                   std::optional<double> measured_per_cost, double total_h, int workers) {
+    if (spec.target)
+        out << "target " << config::to_string(spec.target->quantity)
+            << ": 'to run' is the current round; each point that needs more gets "
+            << spec.target->round
+            << " more per round, up to max_realizations = " << spec.target->max_realizations
+            << " (later rounds depend on the results)\n";
+    out << "basis: cost model (mobile particles x time steps: settling the packing, emptying it "
+           "at the 2-D Beverloo rate of the outlet and wall angle, jams and shakes; "
+           "docs/performance.md) x ";
+    if (measured_per_cost)
+        out << *measured_per_cost * 1e9
+            << " ns per particle-step (measured on the store's realizations of these points)";
+    else
+        out << "the engine's speed measured on one core (" << prior_seconds_per_particle_step * 1e9
+            << " ns per particle-step at 8750 particles, less for smaller systems)";
+    out << "; core-hours count worker time only (the master sleeps)\n";
+    out << "on " << workers << " worker" << (workers == 1 ? "" : "s") << ": about "
+        << format_duration(total_h * 3600.0 / workers) << " of wall time if the load balances\n";
 }
 
 }  // namespace
@@ -437,23 +530,8 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
     std::snprintf(line, line_size, "%-*s %9s %7s %7s %12s %11s\n", width, "point", "particles",
                   "stored", "to run", "s/realiz.", "core-hours");
     out << line;
-    // With a target, what the run would do now: its rounds replayed from the stored results
-    // (as `campaign run` and `campaign status` do), not the store's plan, which a journal
-    // written before issue 29 fills with every seed up to max_realizations.
-    std::vector<int> missing(spec.points.size(), 0);
-    if (spec.target) {
-        std::map<std::string, PointResults> results;
-        if (existing)
-            for (auto& r : store::read_journal_realizations(store_path))
-                results[r.label][r.record.realization] = std::move(r.result);
-        std::vector<double> expected;
-        for (const auto& pt : spec.points)
-            expected.push_back(expected_cost(pt.scene));
-        const RoundState rounds = replay_rounds(spec, results, expected);
-        if (!rounds.finished)
-            for (const auto& [p, i] : rounds.missing)
-                ++missing[std::size_t(p)];
-    }
+    const std::vector<int> missing =
+        spec.target ? missing_in_round(spec, store_path, existing) : std::vector<int>();
     double total_h = 0.0;
     int total_runs = 0;
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
@@ -481,25 +559,8 @@ int dry_run(const RunOptions& opt, std::ostream& out, std::ostream& err, DryRunT
         totals->worker_seconds = total_h * 3600.0;
         totals->realizations = total_runs;
     }
-    if (spec.target)
-        out << "target " << config::to_string(spec.target->quantity)
-            << ": 'to run' is the current round; each point that needs more gets "
-            << spec.target->round
-            << " more per round, up to max_realizations = " << spec.target->max_realizations
-            << " (later rounds depend on the results)\n";
-    out << "basis: cost model (mobile particles x time steps: settling the packing, emptying it "
-           "at the 2-D Beverloo rate of the outlet and wall angle, jams and shakes; "
-           "docs/performance.md) x ";
-    if (measured)
-        out << per_cost * 1e9
-            << " ns per particle-step (measured on the store's realizations of these points)";
-    else
-        out << "the engine's speed measured on one core (" << prior_seconds_per_particle_step * 1e9
-            << " ns per particle-step at 8750 particles, less for smaller systems)";
-    out << "; core-hours count worker time only (the master sleeps)\n";
-    const int workers = std::max(1, opt.threads);
-    out << "on " << workers << " worker" << (workers == 1 ? "" : "s") << ": about "
-        << format_duration(total_h * 3600.0 / workers) << " of wall time if the load balances\n";
+    dry_run_basis(out, spec, measured ? std::optional<double>(per_cost) : std::nullopt, total_h,
+                  std::max(1, opt.threads));
     return 0;
 }
 

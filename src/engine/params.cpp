@@ -115,13 +115,11 @@ void require_range(const char* name, double value, double lo, double hi, bool op
     }
 }
 
-}  // namespace
-
-void validate_scene(const SceneParams& p) {
+// The hopper's walls and outlet: sizes, the wall's spacing (no particle slips between two wall
+// disks, nor between the edge disk and its neighbour) and the outlet's free gap.
+void validate_geometry(const SceneParams& p) {
     const auto& h = p.hopper;
     const auto& s = p.particles;
-    const auto& m = p.material;
-    const auto& pr = p.protocol;
     require_range("particles.d_small", s.d_small, 0.0, 1.0, true, " m");
     require_range("particles.d_large", s.d_large, s.d_small, 1.0, false, " m");
     require_range("hopper.width", h.width, 2.0 * s.d_large, 100.0, true, " m");
@@ -166,6 +164,12 @@ void validate_scene(const SceneParams& p) {
             throw ConfigError(msg.str());
         }
     }
+}
+
+// The particles, the contact coefficients, the integrator and gravity.
+void validate_particles_and_material(const SceneParams& p) {
+    const auto& s = p.particles;
+    const auto& m = p.material;
     if (s.count < 1 || s.count > 10'000'000)
         throw ConfigError("parameter particles.count = " + std::to_string(s.count) +
                           " is out of range: allowed [1, 10000000]");
@@ -186,6 +190,14 @@ void validate_scene(const SceneParams& p) {
     require_range("integrator.steps_per_collision", p.integrator.steps_per_collision, 2.0, 1e5);
     require_range("integrator.skin", p.integrator.skin, 0.0, 10.0, true);
     require_range("gravity", p.gravity, 0.0, 1e3, true, " m/s^2");
+}
+
+// The fill lattice's spacing, speeds and base, and the column it makes.
+void validate_fill(const SceneParams& p) {
+    const auto& h = p.hopper;
+    const auto& s = p.particles;
+    const auto& pr = p.protocol;
+    const double d_edge = h.edge_diameter.value_or(h.wall_diameter);
     require_range("protocol.fill_gap", pr.fill_gap, 0.0, 10.0);
     require_range("protocol.fill_speed", pr.fill_speed, 0.0, 10.0, false, " m/s");
     require_range("protocol.fill_base", pr.fill_base, 0.0, 1000.0, false, " d_large");
@@ -210,6 +222,11 @@ void validate_scene(const SceneParams& p) {
             throw ConfigError(msg.str());
         }
     }
+}
+
+// Settling, the jam detector, the coarse-grained fields.
+void validate_detection_and_fields(const SceneParams& p) {
+    const auto& pr = p.protocol;
     require_range("protocol.settle_ke", pr.settle_ke, 0.0, 1.0, true);
     require_range("protocol.settle_hold", pr.settle_hold, 0.0, 100.0, true, " s");
     require_range("protocol.settle_max_time", pr.settle_max_time, 0.0, 1e5, true, " s");
@@ -226,6 +243,12 @@ void validate_scene(const SceneParams& p) {
         if (f.kernel == FieldKernel::gaussian)
             require_range("fields.kernel_width", f.kernel_width, 0.05, 100.0, false, " d_large");
     }
+}
+
+// Shakes, the run's limits, the jams per realization and what clears them.
+void validate_unjam_and_limits(const SceneParams& p) {
+    const auto& s = p.particles;
+    const auto& pr = p.protocol;
     require_range("protocol.shake_amplitude", pr.shake_amplitude, 0.0, 100.0, true);
     require_range("protocol.shake_period", pr.shake_period, 0.0, 100.0, true, " s");
     require_range("protocol.shake_direction", pr.shake_direction, -pi, pi, false, " rad");
@@ -257,6 +280,12 @@ void validate_scene(const SceneParams& p) {
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
             " cannot be met with protocol.unjam = refill, which ends every realization at its "
             "first jam; allowed with refill: 0 or 1");
+}
+
+// Settings that only make sense together (the Hertz law, rolling resistance, the steady state).
+void validate_law_choices(const SceneParams& p) {
+    const auto& m = p.material;
+    const auto& pr = p.protocol;
     if (m.normal_law == NormalLaw::hertz && m.collision_time)
         throw ConfigError(
             "parameter material.collision_time_s sets the linear law's stiffness; with "
@@ -277,6 +306,18 @@ void validate_scene(const SceneParams& p) {
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
             " needs protocol.mode = steady_state (the published protocol runs "
             "until the hopper is empty); allowed with mode = published: 0");
+}
+
+}  // namespace
+
+// In this order, so that of several bad values the same one is named first as before.
+void validate_scene(const SceneParams& p) {
+    validate_geometry(p);
+    validate_particles_and_material(p);
+    validate_fill(p);
+    validate_detection_and_fields(p);
+    validate_unjam_and_limits(p);
+    validate_law_choices(p);
 }
 
 double hertz_collision_time(double m, double d, double youngs_modulus, double poisson_ratio,

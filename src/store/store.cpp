@@ -528,7 +528,8 @@ void for_each_journal_realization(const fs::path& store,
 
 std::vector<StoredRealization> read_journal_realizations(const fs::path& store) {
     std::vector<StoredRealization> out;
-    for_each_journal_realization(store, [&](StoredRealization&& s) { out.push_back(std::move(s)); });
+    for_each_journal_realization(store,
+                                 [&](StoredRealization&& s) { out.push_back(std::move(s)); });
     return out;
 }
 
