@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "hopper/stats/exponential_fit.hpp"
+#include "hopper/store/store.hpp"
 
 namespace hopper::campaign {
 
@@ -159,6 +160,19 @@ std::string describe_rounds(const RoundState& s, config::CampaignTarget::Quantit
                 << " stored)\n";
     }
     return out.str();
+}
+
+std::map<std::string, PointResults> read_round_results(const std::filesystem::path& store) {
+    std::map<std::string, PointResults> stored;
+    store::for_each_journal_realization(store, [&](store::StoredRealization&& r) {
+        engine::RealizationResult slim;
+        slim.status = r.result.status;
+        slim.survival_times = std::move(r.result.survival_times);
+        slim.censored = std::move(r.result.censored);
+        slim.avalanche_sizes = std::move(r.result.avalanche_sizes);
+        stored[r.label][r.record.realization] = std::move(slim);
+    });
+    return stored;
 }
 
 }  // namespace hopper::campaign

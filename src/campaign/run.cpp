@@ -145,9 +145,7 @@ MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
     const fs::path& store_path = st.path();
     MasterReport all;
     for (;;) {
-        std::map<std::string, PointResults> stored;
-        for (auto& r : store::read_journal_realizations(store_path))
-            stored[r.label][r.record.realization] = std::move(r.result);
+        const std::map<std::string, PointResults> stored = read_round_results(store_path);
         const RoundState rs = replay_rounds(spec, stored, cost);
         if (rs.finished) {
             err << "campaign: target " << config::to_string(quantity)
@@ -441,10 +439,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
 std::vector<int> missing_in_round(const config::CampaignSpec& spec, const fs::path& store_path,
                                   bool existing) {
     std::vector<int> missing(spec.points.size(), 0);
-    std::map<std::string, PointResults> results;
-    if (existing)
-        for (auto& r : store::read_journal_realizations(store_path))
-            results[r.label][r.record.realization] = std::move(r.result);
+    const std::map<std::string, PointResults> results =
+        existing ? read_round_results(store_path) : std::map<std::string, PointResults>();
     std::vector<double> expected;
     for (const auto& pt : spec.points)
         expected.push_back(expected_cost(pt.scene));

@@ -304,9 +304,8 @@ std::string apply_target(store::StoreStatus& s) {
     const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
     if (!recorded || !recorded->target) return {};
     const config::CampaignSpec& spec = *recorded;
-    std::map<std::string, campaign::PointResults> stored;
-    for (auto& r : store::read_journal_realizations(s.store))
-        stored[r.label][r.record.realization] = std::move(r.result);
+    const std::map<std::string, campaign::PointResults> stored =
+        campaign::read_round_results(s.store);
     std::vector<double> cost;
     for (const auto& p : spec.points)
         cost.push_back(campaign::expected_cost(p.scene));

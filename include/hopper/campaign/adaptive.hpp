@@ -13,6 +13,7 @@
 // continues exactly the same sequence of rounds. Within a round, points are handed out cheapest
 // information first: ascending expected cost of the realizations the point still needs.
 
+#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
@@ -53,6 +54,12 @@ struct RoundState {
     // (point index, realization index).
     std::vector<std::pair<int, int>> missing;
 };
+
+// Every stored result of a store's journal by point label and realization index, reduced to
+// what precision() reads (status, survival intervals, censoring, avalanche sizes): the rounds are
+// replayed from the whole journal at every round, so the results are read one at a time and
+// slimmed as they come (issue 44; a whole result of the tiny scene is about 15 kB).
+std::map<std::string, PointResults> read_round_results(const std::filesystem::path& store);
 
 // Replays the decisions from the stored results (by point label) and returns where the
 // campaign stands: the current round and what it still lacks, or finished. `cost` is the
