@@ -163,6 +163,14 @@ const std::vector<KeyDef> table = {
            [](P& p, V v) { p.material.mu_r = num(v); },
            [](const P& p) -> Read { return p.material.mu_r; },
            FP{"material.mu_r", 47, Enters::unless_default}},
+    KeyDef{"material", "plate_friction", "material.plate_friction", Kind::real, 0, 1, closed, closed, "",
+           [](P& p, V v) { p.material.plate_friction = num(v); },
+           [](const P& p) -> Read { return p.material.plate_friction; },
+           FP{"material.plate_friction", 65, Enters::unless_default}},
+    KeyDef{"material", "plate_speed_m_s", "material.plate_speed_m_s", Kind::real, 0, 10, open, closed, "m/s",
+           [](P& p, V v) { p.material.plate_speed = num(v); },
+           [](const P& p) -> Read { return p.material.plate_speed; },
+           FP{"material.plate_speed_m_s", 66, Enters::unless_default}},
     KeyDef{"material", "normal_damping", "material.normal_damping", Kind::choice, 0, 0, closed, closed, "",
            [](P& p, V v) {
                using N = engine::NormalDamping;

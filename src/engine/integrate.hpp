@@ -6,6 +6,7 @@
 // its block in the batched passes, gives exactly the bits of a separate pass: the same element-
 // by-element loops (kernel.cpp) run on a block of particles instead of all of them.
 
+#include <cmath>
 #include <cstddef>
 
 #include "hopper/engine/contact.hpp"
@@ -59,7 +60,23 @@ struct CorrectArgs {
     const int* reach = nullptr;
     bool next_displacement = false;
     const double *xref = nullptr, *yref = nullptr;
+    // Plate friction (SystemConfig::plate_decel; 0: none): added to the forces of a block before
+    // its correction, from the velocities it is corrected from.
+    double plate_decel = 0.0, plate_speed = 0.0;
 };
+
+// Adds the plate friction -m a v / max(|v|, v_c) to the forces of the particles [i0, i1)
+// (docs/model.md, "Plate friction"). One loop for every path, so every path gives the same bits.
+inline void add_plate_friction(const CorrectArgs& c, double* fx, double* fy, int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+        const double vx = c.vx[i], vy = c.vy[i];
+        const double speed = std::sqrt(vx * vx + vy * vy);
+        const double k =
+            c.plate_decel / (c.inv_m[i] * (speed > c.plate_speed ? speed : c.plate_speed));
+        fx[i] -= k * vx;
+        fy[i] -= k * vy;
+    }
+}
 
 // The corrector over the particles [i0, i1), whose forces (and torques when rot) are final:
 // the integrator's own multi-versioned loops (kernel.cpp: AVX-512, AVX2 or the baseline, picked
@@ -67,8 +84,8 @@ struct CorrectArgs {
 // and gives the separate loops' bits. Called once per block of particles, after its rows (the
 // force pass of every path). Defined in kernel.cpp, not inline. Returns the block's largest
 // squared next displacement when c.next_displacement (NaN if a position is not finite), else 0.
-double correct_block(const CorrectArgs& c, const double* fx, const double* fy, const double* tq,
-                     bool rot, int i0, int i1);
+double correct_block(const CorrectArgs& c, double* fx, double* fy, const double* tq, bool rot,
+                     int i0, int i1);
 
 // The predictor over the particles [j0, j1) (the separate pass's loops on that range, so the
 // same bits), then their forces (and torques when rot) set to zero: called by the fused passes

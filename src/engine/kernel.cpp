@@ -260,6 +260,11 @@ struct KernelImpl final : System::Kernel {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
         const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
+        if (s.config_.plate_decel > 0.0) {
+            detail::CorrectArgs c;
+            correct_args(s, c, false);
+            detail::add_plate_friction(c, s.fx_.data(), s.fy_.data(), 0, int(n));
+        }
         if constexpr (S == Scheme::gear4) {
             gear_correct_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.x_.data(), s.vx_.data(),
                               s.x2_.data(), s.x3_.data(), s.x4_.data());
@@ -336,6 +341,8 @@ struct KernelImpl final : System::Kernel {
         }
         // The next step's displacement, for StepFusion::step's rebuild test.
         c.next_displacement = s.fusion_ == StepFusion::step;
+        c.plate_decel = s.config_.plate_decel;
+        c.plate_speed = s.config_.plate_speed;
         c.xref = s.xref_.data();
         c.yref = s.yref_.data();
         if (predict) {
@@ -369,10 +376,11 @@ struct KernelImpl final : System::Kernel {
     }
 };
 
-double detail::correct_block(const CorrectArgs& c, const double* fx, const double* fy,
-                             const double* tq, bool rot, int i0, int i1) {
+double detail::correct_block(const CorrectArgs& c, double* fx, double* fy, const double* tq,
+                             bool rot, int i0, int i1) {
     const std::size_t n = i1 > i0 ? std::size_t(i1 - i0) : 0;
     if (n == 0 || c.scheme == CorrectArgs::none) return 0.0;
+    if (c.plate_decel > 0.0) add_plate_friction(c, fx, fy, i0, i1);
     double next = 0.0;
     if (c.scheme == CorrectArgs::gear4) {
         if (c.next_displacement) {

@@ -292,6 +292,8 @@ void validate_law_choices(const SceneParams& p) {
             "material.normal_law = hertz the stiffness comes from material.youngs_modulus and "
             "material.poisson_ratio (leave collision_time_s out)");
     require_range("material.mu_r", m.mu_r, 0.0, 1.0);
+    require_range("material.plate_friction", m.plate_friction, 0.0, 1.0);
+    require_range("material.plate_speed", m.plate_speed, 0.0, 10.0, true, " m/s");
     if (m.mu_r > 0.0 && !(m.kt_over_kn > 0.0 && (m.system.mu > 0.0 || m.wall.mu > 0.0)))
         throw ConfigError("parameter material.mu_r = " + std::to_string(m.mu_r) +
                           " needs the tangential spring of friction (material.kt_over_kn > 0 "

@@ -73,6 +73,8 @@ SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants&
     sc.normal_law = p.material.normal_law;
     sc.rolling = p.material.mu_r > 0.0;
     sc.particle.mu_r = sc.wall.mu_r = p.material.mu_r;
+    sc.plate_decel = p.material.plate_friction * p.gravity;
+    sc.plate_speed = p.material.plate_speed;
     for (auto [cp, alpha] :
          {std::pair{&sc.particle, c.hertz_alpha_system}, std::pair{&sc.wall, c.hertz_alpha_wall}}) {
         cp->hertz_k = c.hertz_k;

@@ -167,6 +167,11 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
     // Polydispersity (issue 39): only off its default.
     if (p.particles.size_spread != d.particles.size_spread)
         l.add("particles.size_spread", p.particles.size_spread);
+    // Plate friction (issue 39): only off its defaults.
+    if (p.material.plate_friction != d.material.plate_friction)
+        l.add("material.plate_friction", p.material.plate_friction);
+    if (p.material.plate_speed != d.material.plate_speed)
+        l.add("material.plate_speed_m_s", p.material.plate_speed);
     return l.take();
 }
 

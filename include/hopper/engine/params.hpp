@@ -122,6 +122,13 @@ struct MaterialParams {
     // Rolling resistance (issue 28): the coefficient of the torque mu_r R* |F_n| against the
     // relative rolling of two touching disks (particles and walls); 0 = none.
     double mu_r = 0.0;
+    // Friction against the front and back plates of a quasi-2D cell (issue 39; docs/model.md,
+    // "Plate friction"): every mobile disk feels a force of plate_friction m g against its
+    // velocity, Coulomb's law with the plates' normal load a fixed fraction of the weight, made
+    // viscous below plate_speed (v / plate_speed of it, so that a disk at rest feels none);
+    // 0 = none (the published study's disks).
+    double plate_friction = 0.0;
+    double plate_speed = 0.01;  // m/s
 };
 
 // Default: velocity Verlet at delta = 200, the cheapest setting of bench/accuracy whose every

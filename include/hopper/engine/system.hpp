@@ -66,6 +66,11 @@ struct SystemConfig {
     NormalLaw normal_law = NormalLaw::linear;
     // Rolling resistance (ContactParams::mu_r > 0): the registry's WithRolling variant of the law.
     bool rolling = false;
+    // Plate friction (MaterialParams::plate_friction): a force of m plate_decel against each
+    // mobile disk's velocity v, times |v| / plate_speed below plate_speed; 0 = none (and not a
+    // flop of the step is spent on it).
+    double plate_decel = 0.0;   // m/s^2
+    double plate_speed = 0.01;  // m/s
 };
 
 // A particle that left through the removal floor.
