@@ -278,9 +278,13 @@ std::vector<int> planned_realizations(const Campaign& c, const store::Store& st)
     return planned;
 }
 
-bool has_result(const store::Store& st, const std::string& label, int r) {
+store::TaskState task_state(const store::Store& st, const std::string& label, int r) {
     const store::TaskEntry* e = st.task(label, r);
-    return e && (e->state == store::TaskState::done || e->state == store::TaskState::failed);
+    return e ? e->state : store::TaskState::pending;
+}
+
+bool has_result(store::TaskState s) {
+    return s == store::TaskState::done || s == store::TaskState::failed;
 }
 
 // What to run: the planned tasks with no result yet (pending, or left in error), the most
@@ -296,9 +300,10 @@ std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
         const auto& label = spec.points[p].label;
         totals.total += planned[p];
         for (int r = 0; r < planned[p]; ++r) {
-            if (has_result(st, label, r)) {
+            const store::TaskState state = task_state(st, label, r);
+            if (has_result(state)) {
                 ++totals.finished;
-                if (st.task(label, r)->state == store::TaskState::failed) ++totals.failed;
+                if (state == store::TaskState::failed) ++totals.failed;
                 continue;
             }
             if (spec.target) continue;  // the rounds decide what runs (run_rounds)
@@ -345,7 +350,7 @@ void open_checkpoints(CheckpointFiles& files, const Campaign& c, const store::St
     for (std::size_t p = 0; p < spec.points.size(); ++p)
         for (int r = 0; r < planned[p]; ++r) {
             const auto& label = spec.points[p].label;
-            if (has_result(st, label, r))
+            if (has_result(task_state(st, label, r)))
                 files.remove(CheckpointKey{label, r, c.tasks.at(static_cast<int>(p), r).seed, 0});
         }
     files.remove_dir_if_empty();
