@@ -35,45 +35,57 @@ rank_pids() {
     done
 }
 if [ "$NP" -gt 0 ]; then
-    # One rank alone: a worker, then the master (mpirun then ends the rest of the job), each in
-    # a fresh store of its own, so that the killed rank is in the middle of the campaign; each
-    # store is then resumed to the end and must equal the reference. The whole mini campaign
-    # takes about a second, so a kill can come after the last realization: that is a miss of
-    # the timing, not a fault, and is tried again (fresh store, shorter wait), at most 4 times.
-    # Margin: the fourth waits 50-175 ms from the rank's start, so four misses need a campaign
-    # that ends within 0.2 s of it (about 1.5 s here: MPI start, then 12 realizations); a slow
-    # machine only makes a hit more likely.
-    for rank in $((NP - 1)) 0; do
-        RSTORE=$WORK/rank$rank.h5
+    # One rank alone: a worker, then the master (mpirun then ends the rest of the job); then a
+    # node lost (issue 44): every rank of a group at once, the workers' ranks together and the
+    # master with a worker. Each in a fresh store of its own, so that the killed ranks are in
+    # the middle of the campaign; each store is then resumed to the end and must equal the
+    # reference. The whole mini campaign takes about a second, so a kill can come after the last
+    # realization: that is a miss of the timing, not a fault, and is tried again (fresh store,
+    # shorter wait), at most 4 times. Margin: the fourth waits 50-175 ms from the store's
+    # creation, so four misses need a campaign that ends within 0.2 s of it (about a second here
+    # for 12 realizations on two workers); a slow machine only makes a hit more likely.
+    groups=("$((NP - 1))" 0)
+    [ "$NP" -ge 3 ] && groups+=("$((NP - 2)) $((NP - 1))" "0 1")
+    for group in "${groups[@]}"; do
+        name=rank${group// /+}
+        RSTORE=$WORK/$name.h5
         killed=0
         for attempt in 1 2 3 4; do
             rm -rf "$RSTORE" "$RSTORE".*
             start_job mpirun -np "$NP" "$EXE" run "$MINI" --store "$RSTORE" --progress-interval 0 --flush-interval 0
-            # The rank's process, once mpirun has started it.
-            wait_until "rank $rank of the job starting" eval '[ -n "$(rank_pids "$rank")" ] || ! job_alive'
-            pids=$(rank_pids "$rank")
-            [ "$(echo "$pids" | wc -w)" -eq 1 ] ||
-                { kill_job KILL; fail "rank $rank: expected one process, found '$pids'"; }
+            # The ranks' processes, once mpirun has started them.
+            pids=""
+            for rank in $group; do
+                wait_until "rank $rank of the job starting" eval '[ -n "$(rank_pids "$rank")" ] || ! job_alive'
+                p=$(rank_pids "$rank")
+                [ "$(echo "$p" | wc -w)" -eq 1 ] ||
+                    { kill_job KILL; fail "rank $rank: expected one process, found '$p'"; }
+                pids="$pids $p"
+            done
+            # Timed from the store's creation, so that the kill falls in the campaign, not in
+            # MPI's start (which takes longer than the wait on a loaded machine).
+            wait_until "the run creating the store" eval '[ -e "$RSTORE.journal" ] || ! job_alive'
             random_sleep $((200 / attempt)) $((700 / attempt))
-            if kill -KILL "$pids" 2>/dev/null; then
+            # One kill(2) per process, back to back: no rank sees the others' deaths first.
+            if kill -KILL $pids 2>/dev/null; then
                 killed=1
                 break
             fi
             wait "$JOB" 2>/dev/null
-            echo "kill of rank $rank, attempt $attempt: the run ended first; again" >&2
+            echo "kill of ranks $group, attempt $attempt: the run ended first; again" >&2
         done
-        [ $killed -eq 1 ] || fail "the kill of rank $rank hit no process in 4 attempts (the runs ended first)"
+        [ $killed -eq 1 ] || fail "the kill of ranks $group hit no process in 4 attempts (the runs ended first)"
         wait "$JOB" 2>/dev/null
         rc=$?
-        [ "$rc" -ne 0 ] || fail "the job exited 0 after the kill of rank $rank"
+        [ "$rc" -ne 0 ] || fail "the job exited 0 after the kill of ranks $group"
         # mpirun ends the other ranks (within a few seconds; a hang outlasts the bound).
         (wait_until "" eval '[ -z "$(pgrep -s "$JOB")" ]') 2>/dev/null ||
-            { kill_job KILL; fail "the job outlived the kill of rank $rank by $WAIT_BOUND s"; }
-        echo "kill of rank $rank: $("$EXE" status "$RSTORE" | grep progress)" >&2
-        run_expect 0 "rank${rank}_resume" mpirun -np "$NP" "$EXE" run "$MINI" --store "$RSTORE" --progress-interval 0 --flush-interval 0
-        expect_in "rank${rank}_resume.err" "finished: all 12 realizations"
-        digest "$RSTORE" "rank$rank.digest"
-        same_digests "$WORK/ref.digest" "rank$rank.digest"
+            { kill_job KILL; fail "the job outlived the kill of ranks $group by $WAIT_BOUND s"; }
+        echo "kill of ranks $group: $("$EXE" status "$RSTORE" | grep progress)" >&2
+        run_expect 0 "${name}_resume" mpirun -np "$NP" "$EXE" run "$MINI" --store "$RSTORE" --progress-interval 0 --flush-interval 0
+        expect_in "${name}_resume.err" "finished: all 12 realizations"
+        digest "$RSTORE" "$name.digest"
+        same_digests "$WORK/ref.digest" "$name.digest"
     done
 fi
 # Random kills: the moments are random by design, so the assertions hold at any moment. A kill
