@@ -135,6 +135,12 @@ class Dispatcher {
     std::vector<Item> stored_in_batch_;  // stored since the store's last commit (checkpoints on)
     bool running_changed_ = false;       // a worker became idle since the running file was written
 
+    // Silence is counted only while the master listens: the end of the last silence check and
+    // the wait the receive after it was given (check_silence credits a longer gap, a master
+    // that was stopped or stalled, to every busy worker).
+    Clock::time_point last_check_ = Clock::now();
+    Clock::duration last_wait_{};
+
     bool draining_ = false, stop_sent_ = false, stop_announced_ = false;
     Clock::time_point drain_deadline_{};
     const bool progress_;

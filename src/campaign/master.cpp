@@ -57,7 +57,9 @@ MasterReport Dispatcher::run() {
         if (timed_ && !draining_ && !busy_.empty() && seconds_to_deadline() <= options_.grace)
             stop_at_deadline();
         if (busy_.empty() && (queue_.empty() || draining_ || !report_.fail_fast.empty())) break;
-        receive(wait_time());
+        const std::chrono::milliseconds wait = wait_time();
+        last_wait_ = wait;
+        receive(wait);
         check_silence();
         if (progress_ && Clock::now() >= next_progress_) {
             print_progress();
@@ -249,8 +251,21 @@ void Dispatcher::receive(std::chrono::milliseconds wait) {
 
 // Busy workers silent for longer than their realization's limit: reported, and the
 // realization goes to the front of the queue for another worker.
+//
+// Silence is what the master heard while it listened. A pass of the loop that took longer than
+// the wait it gave the receive, beyond a quarter of a second, is time the master itself did not
+// run (SIGSTOP, a swapped or overloaded node, a store write stalled on the file system): the
+// workers' messages of that time wait in the channel, some not yet matched when it looks again
+// (MPI delivers a large message only as both sides make progress). That gap is credited to
+// every busy worker, so that a stalled master does not hand realizations out again that run
+// well (issue 44: a master stopped for 3 s with a limit of 1 s did so for both workers).
 void Dispatcher::check_silence() {
     const auto now = Clock::now();
+    const auto stalled = (now - last_check_) - last_wait_ - std::chrono::milliseconds(250);
+    last_check_ = now;
+    if (stalled > Clock::duration::zero())
+        for (auto& [w, b] : busy_)
+            b.heard += stalled;
     for (auto it = busy_.begin(); it != busy_.end();) {
         const Item item = it->second.item;
         const auto limit = silence_limit(item);

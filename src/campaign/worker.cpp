@@ -7,6 +7,7 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
@@ -91,6 +92,13 @@ Message run_task(const Message& m, const ResumableTaskRunner& run, Shared& sh,
                 sh.state_ready = false;
             }
         }
+    } catch (const std::bad_alloc& e) {
+        // A memory limit (ulimit, a cgroup without the OOM killer, Slurm's --mem) below what the
+        // scene needs: said as such, not as the bare "std::bad_alloc" (issue 44).
+        reply = error_reply(m, std::string("out of memory (") + e.what() +
+                                   "): the worker could not allocate what this realization "
+                                   "needs; raise the memory limit of the worker processes "
+                                   "(ulimit -d/-v, Slurm's --mem) or give them more memory each");
     } catch (const std::exception& e) {
         reply = error_reply(m, e.what());
     } catch (...) {
