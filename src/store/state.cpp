@@ -25,7 +25,6 @@ std::string to_string(TaskState s) {
 ResultSummary summarize(const engine::RealizationResult& r, const ResultRecord& rec) {
     ResultSummary s;
     s.status = r.status;
-    s.message = r.message;
     s.n_jams = r.n_jams;
     s.n_intervals = static_cast<int>(r.survival_times.size());
     for (std::size_t i = 0; i < r.survival_times.size(); ++i) {
@@ -146,6 +145,7 @@ std::int64_t State::apply(const ResultRecord& r, const engine::RealizationResult
     }
     e.result = summarize(result, r);
     e.state = result.status == engine::Status::failed ? TaskState::failed : TaskState::done;
+    if (e.state == TaskState::failed) messages[{p, r.realization}].result = result.message;
     e.row = rows++;
     if (!runs.empty()) {
         ++runs.back().stored;
@@ -167,7 +167,7 @@ int State::apply(const ErrorRecord& r) {
         t.resize(static_cast<std::size_t>(r.realization) + 1);
     TaskEntry& e = t[static_cast<std::size_t>(r.realization)];
     ++e.errors;
-    e.last_error = r.reason;
+    messages[{p, r.realization}].last_error = r.reason;
     if (!e.result) e.state = TaskState::error;
     failures.push_back(Failure{r.label, r.realization, r.seed, r.rank, r.attempt, true, r.reason});
     return p;
@@ -175,6 +175,12 @@ int State::apply(const ErrorRecord& r) {
 
 void State::apply(const RunEndRecord& r) {
     if (!runs.empty()) runs.back().end = r;
+}
+
+const State::Messages& State::message_of(int point, int realization) const {
+    static const Messages none;
+    const auto it = messages.find({point, realization});
+    return it == messages.end() ? none : it->second;
 }
 
 StoreStatus State::status() const {
@@ -215,16 +221,18 @@ StoreStatus State::status() const {
                 }
                 case TaskState::failed:
                     ++ps.failed;
-                    s.failures.push_back(Failure{ps.label, static_cast<int>(r),
-                                                 seed_of(static_cast<int>(p), static_cast<int>(r)),
-                                                 e.result->rank, 0, false, e.result->message});
+                    s.failures.push_back(Failure{
+                        ps.label, static_cast<int>(r),
+                        seed_of(static_cast<int>(p), static_cast<int>(r)), e.result->rank, 0, false,
+                        message_of(static_cast<int>(p), static_cast<int>(r)).result});
                     break;
                 case TaskState::error:
                     ++ps.failed;
                     ++ps.errors;
-                    s.failures.push_back(Failure{ps.label, static_cast<int>(r),
-                                                 seed_of(static_cast<int>(p), static_cast<int>(r)),
-                                                 0, e.errors, true, e.last_error});
+                    s.failures.push_back(Failure{
+                        ps.label, static_cast<int>(r),
+                        seed_of(static_cast<int>(p), static_cast<int>(r)), 0, e.errors, true,
+                        message_of(static_cast<int>(p), static_cast<int>(r)).last_error});
                     break;
                 case TaskState::pending:
                     break;

@@ -9,6 +9,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hopper/store/journal.hpp"
@@ -21,7 +22,14 @@ struct State {
     CampaignPlan plan;  // union of every run's plan; points in order of first appearance
     std::map<std::string, int> point_index;
     std::vector<std::vector<TaskEntry>> tasks;  // [point][realization], at least planned long
-    std::int64_t rows = 0;                      // stored results
+    // The words of the few tasks that have them, by (point, realization): the message of a
+    // failed result and the reason of the last exception (TaskEntry holds numbers only).
+    struct Messages {
+        std::string result;      // the failed result's message
+        std::string last_error;  // the last exception's reason
+    };
+    std::map<std::pair<int, int>, Messages> messages;
+    std::int64_t rows = 0;  // stored results
     std::vector<RunSummary> runs;
     std::vector<Failure> failures;  // every error record, in order
     int duplicates = 0;             // results for a task that already had one (ignored)
@@ -50,6 +58,8 @@ struct State {
     // allotment grew. Throws when `first` leaves a gap.
     bool extend_seeds(int point, int first, std::span<const std::uint64_t> seeds);
     std::uint64_t seed_of(int point, int realization) const;
+    // The task's words (empty when it has none).
+    const Messages& message_of(int point, int realization) const;
     StoreStatus status() const;
 };
 

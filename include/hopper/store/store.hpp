@@ -41,25 +41,26 @@ std::filesystem::path journal_path(const std::filesystem::path& store);
 enum class TaskState : std::uint8_t { pending = 0, done = 1, failed = 2, error = 3 };
 std::string to_string(TaskState s);
 
-// What the summary tables need from a stored result.
+// What the summary tables need from a stored result. One per realization of the campaign, held
+// for the whole run (10^6 of them at scale: issue 44), so it holds numbers only; the message of
+// a failed result and the reason of the last exception are kept beside the tasks, in the
+// store's state, since few tasks have one (State::messages).
 struct ResultSummary {
-    engine::Status status = engine::Status::failed;
-    std::string message;
+    double survival_sum = 0.0;  // s, all intervals, censored included
+    double task_seconds = 0.0;
+    std::optional<double> empty_time;
     int n_jams = 0;
     int n_intervals = 0;
     int n_uncensored = 0;
-    double survival_sum = 0.0;  // s, all intervals, censored included
-    std::optional<double> empty_time;
     int rank = 0;
-    double task_seconds = 0.0;
+    engine::Status status = engine::Status::failed;
 };
 
 struct TaskEntry {
-    TaskState state = TaskState::pending;
     std::int64_t row = -1;  // row in /realizations
-    int errors = 0;         // attempts that ended in an exception
-    std::string last_error;
     std::optional<ResultSummary> result;
+    int errors = 0;  // attempts that ended in an exception
+    TaskState state = TaskState::pending;
 };
 
 struct PointStatus {
