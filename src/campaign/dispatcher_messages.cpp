@@ -81,8 +81,8 @@ void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const M
             stored_in_batch_.push_back(item);  // once its result is durable
         else
             restart_without_checkpoint(item, std::string(what.substr(checkpoint_refused.size())) +
-                                                 ": the checkpoint of '" + todo_[item.index].label +
-                                                 "' #" +
+                                                 ": the checkpoint of '" +
+                                                 todo_[item.index].label() + "' #" +
                                                  std::to_string(todo_[item.index].realization));
         return;
     }
@@ -92,7 +92,7 @@ void Dispatcher::on_error(int worker, const Item& item, const Busy& was, const M
     if (ckpt_ && was.resumed && !finished_[item.index]) {
         ckpt_->remove(key_of(item));
         saved_before_[item.index] = 0.0;
-        log_ << "campaign: the checkpoint of '" << todo_[item.index].label << "' #"
+        log_ << "campaign: the checkpoint of '" << todo_[item.index].label() << "' #"
              << todo_[item.index].realization
              << " is removed: the next attempt starts from the beginning" << std::endl;
     }
@@ -105,14 +105,14 @@ void Dispatcher::on_interrupted(int worker, const Item& item, const Busy& was, c
         save_state(worker, item, was.base_seconds + m.seconds, m.payload)) {
         report_.saved_worker_seconds += m.seconds;
         saved_before_[item.index] = was.base_seconds + m.seconds;
-        log_ << "campaign: '" << todo_[item.index].label << "' #" << todo_[item.index].realization
+        log_ << "campaign: '" << todo_[item.index].label() << "' #" << todo_[item.index].realization
              << " stopped after " << format_duration(m.seconds) << " on worker " << worker
              << "; its state is saved and continues on resume" << std::endl;
     } else {
         const double thrown = std::max(0.0, m.seconds - was.saved_seconds);
         report_.lost_worker_seconds += thrown;
         report_.saved_worker_seconds += m.seconds - thrown;
-        log_ << "campaign: '" << todo_[item.index].label << "' #" << todo_[item.index].realization
+        log_ << "campaign: '" << todo_[item.index].label() << "' #" << todo_[item.index].realization
              << " stopped after " << format_duration(m.seconds) << " on worker " << worker << "; "
              << format_duration(thrown) << " of its worker time is thrown away ("
              << (ckpt_ ? "its state at the stop was not saved" : "checkpoints are off") << "); "
@@ -141,7 +141,7 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
     // over from its beginning; the fresh attempt's outcome is what is stored.
     if (resumed && ckpt_ && r.status == engine::Status::failed && !finished_[item.index]) {
         report_.lost_worker_seconds += m.seconds;
-        restart_without_checkpoint(item, "'" + t.label + "' #" + std::to_string(t.realization) +
+        restart_without_checkpoint(item, "'" + t.label() + "' #" + std::to_string(t.realization) +
                                              " failed after continuing from its checkpoint (" +
                                              r.message + "); the checkpoint");
         return;
@@ -149,7 +149,7 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
     if (finished_[item.index]) {
         const bool same = store::physics_digest(r) == digest_[item.index];
         ++(same ? report_.late_identical : report_.late_different);
-        log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '" << t.label
+        log_ << "campaign: " << (same ? "" : "warning: ") << "the second result of '" << t.label()
              << "' #" << t.realization << " (worker " << worker << ") is "
              << (same ? "identical to the stored one; stored once"
                       : "DIFFERENT from the stored one (the engine is deterministic: a bad "
@@ -160,8 +160,8 @@ void Dispatcher::accept_result(int worker, const Item& item, const Message& m, b
     // The worker time of a realization continued from a checkpoint includes the time its
     // checkpoint holds.
     const double seconds = m.seconds + saved_before_[item.index];
-    store_.append(store::ResultRecord{t.label, t.realization, t.seed, worker, item.attempt, seconds,
-                                      store::unix_now(), m.payload});
+    store_.append(store::ResultRecord{t.label(), t.realization, t.seed, worker, item.attempt,
+                                      seconds, store::unix_now(), m.payload});
     finished_[item.index] = 1;
     if (ckpt_) stored_in_batch_.push_back(item);  // its file goes once the result is durable
     if (t.expected_seconds > 0 && seconds > 0) {
@@ -217,9 +217,9 @@ void Dispatcher::check_fail_fast(const TaskRef& t, const engine::RealizationResu
             shape += ch;
         }
     }
-    if (++early_failures_[{t.label, shape}] < options_.fail_fast_after) return;
-    report_.fail_fast = std::to_string(options_.fail_fast_after) + " realizations of '" + t.label +
-                        "' failed the same way before the outlet opened (the last: #" +
+    if (++early_failures_[{t.label(), shape}] < options_.fail_fast_after) return;
+    report_.fail_fast = std::to_string(options_.fail_fast_after) + " realizations of '" +
+                        t.label() + "' failed the same way before the outlet opened (the last: #" +
                         std::to_string(t.realization) + ", " + r.message + ")";
     log_ << "campaign: failing fast: " << report_.fail_fast << "; handing out no more tasks"
          << (busy_.empty() ? "" : " (running ones finish)") << std::endl;
@@ -229,18 +229,18 @@ void Dispatcher::check_fail_fast(const TaskRef& t, const engine::RealizationResu
 // attempts.
 void Dispatcher::record_error(int worker, const Item& item, const std::string& reason) {
     const TaskRef& t = todo_[item.index];
-    store_.append(store::ErrorRecord{t.label, t.realization, t.seed, worker, item.attempt,
+    store_.append(store::ErrorRecord{t.label(), t.realization, t.seed, worker, item.attempt,
                                      store::unix_now(), reason});
     ++report_.errors;
     ++errors_[item.index];
     if (errors_[item.index] < options_.max_attempts && !draining_) {
-        log_ << "campaign: '" << t.label << "' #" << t.realization << " raised an error on "
+        log_ << "campaign: '" << t.label() << "' #" << t.realization << " raised an error on "
              << "worker " << worker << " (" << reason << "); trying once more" << std::endl;
         queue_.push_front({item.index, item.attempt + 1});
     } else {
         ++report_.gave_up;
         ++failed_now_;
-        log_ << "campaign: '" << t.label << "' #" << t.realization << " failed "
+        log_ << "campaign: '" << t.label() << "' #" << t.realization << " failed "
              << errors_[item.index] << " time(s) (" << reason << "); left for the next run"
              << std::endl;
     }
@@ -248,7 +248,7 @@ void Dispatcher::record_error(int worker, const Item& item, const std::string& r
 
 CheckpointKey Dispatcher::key_of(const Item& item) const {
     const TaskRef& t = todo_[item.index];
-    return CheckpointKey{t.label, t.realization, t.seed, t.physics};
+    return CheckpointKey{t.label(), t.realization, t.seed, t.physics};
 }
 
 bool Dispatcher::save_state(int worker, const Item& item, double seconds,
@@ -258,7 +258,7 @@ bool Dispatcher::save_state(int worker, const Item& item, double seconds,
         ++report_.checkpoints_written;
         return true;
     } catch (const core::StoreError& e) {
-        log_ << "campaign: warning: the state of '" << todo_[item.index].label << "' #"
+        log_ << "campaign: warning: the state of '" << todo_[item.index].label() << "' #"
              << todo_[item.index].realization << " from worker " << worker
              << " could not be saved (" << e.what() << "); it will start over" << std::endl;
         return false;

@@ -140,7 +140,7 @@ std::deque<Item>::iterator Dispatcher::pick_task() {
             std::max(0.0, t.expected_seconds * correction() - saved_before_[pick->index]);
         if (need <= left) break;
         if (!ckpt_ && need > allocation_ && hopeless_.insert(pick->index).second)
-            log_ << "campaign: warning: '" << t.label << "' #" << t.realization
+            log_ << "campaign: warning: '" << t.label() << "' #" << t.realization
                  << " is expected to need " << format_duration(need)
                  << ", more than this allocation's " << format_duration(allocation_)
                  << ", and checkpoints are off: it cannot finish in an allocation "
@@ -149,7 +149,7 @@ std::deque<Item>::iterator Dispatcher::pick_task() {
         // Longer than a whole allocation like this one: it can only ever finish in pieces, so
         // with checkpoints it starts (its state is saved at the deadline) rather than never.
         if (ckpt_ && need > allocation_ && left > 0.25 * allocation_) {
-            log_ << "campaign: '" << t.label << "' #" << t.realization << " is expected to need "
+            log_ << "campaign: '" << t.label() << "' #" << t.realization << " is expected to need "
                  << format_duration(need) << ", more than this allocation's "
                  << format_duration(allocation_)
                  << "; started anyway: its state is saved at the deadline" << std::endl;
@@ -277,7 +277,7 @@ void Dispatcher::check_silence() {
         log_ << "campaign: worker " << it->first << " has been silent for "
              << format_duration(std::chrono::duration<double>(now - it->second.heard).count())
              << " (limit " << format_duration(std::chrono::duration<double>(limit).count())
-             << ") running '" << t.label << "' #" << t.realization << "; "
+             << ") running '" << t.label() << "' #" << t.realization << "; "
              << (draining_ ? "it runs again on resume" : "handing it to another worker")
              << std::endl;
         lost_[it->first] = item;
@@ -312,7 +312,7 @@ void Dispatcher::update_running() {
     for (const auto& [w, b] : busy_) {
         const TaskRef& t = todo_[b.item.index];
         f.tasks.push_back(
-            RunningTask{w, b.started_unix, b.item.attempt, b.resumed, t.realization, t.label});
+            RunningTask{w, b.started_unix, b.item.attempt, b.resumed, t.realization, t.label()});
     }
     write_running(options_.running_file, f);
 }

@@ -42,6 +42,15 @@ std::string compiler_id() {
 
 namespace {
 
+// The points' labels, one shared copy each for their tasks (TaskRef).
+std::vector<std::shared_ptr<const std::string>> shared_labels(const config::CampaignSpec& spec) {
+    std::vector<std::shared_ptr<const std::string>> labels;
+    labels.reserve(spec.points.size());
+    for (const auto& p : spec.points)
+        labels.push_back(std::make_shared<const std::string>(p.label));
+    return labels;
+}
+
 // Seconds a realization is expected to take, from the cost model (particle-steps) at a
 // pessimistic speed (plan.hpp). The default silence limit of a worker depends on it; the
 // progress line's ETA and the deadline's estimates scale it by what was measured.
@@ -157,9 +166,10 @@ MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
         // store records only what is new), then its missing realizations as tasks.
         allot_round(st, c, rs);
         std::vector<TaskRef> todo;
+        const auto labels = shared_labels(spec);
         for (const auto& [p, i] : rs.missing) {
             const config::Task t = c.tasks.at(p, i);
-            todo.push_back(TaskRef{t.task_id, spec.points[std::size_t(p)].label, i, t.seed,
+            todo.push_back(TaskRef{t.task_id, labels[std::size_t(p)], i, t.seed,
                                    expected_seconds(cost[std::size_t(p)])});
         }
         // Progress counts within the allotments so far (not max_realizations per point).
@@ -296,6 +306,7 @@ std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
     const auto& spec = c.sweep.campaign;
     std::vector<TaskRef> todo;
     std::vector<std::size_t> point_of;  // todo's points, for the order
+    const auto labels = shared_labels(spec);
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
         const auto& label = spec.points[p].label;
         totals.total += planned[p];
@@ -309,7 +320,7 @@ std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
             if (spec.target) continue;  // the rounds decide what runs (run_rounds)
             const config::Task t = c.tasks.at(static_cast<int>(p), r);
             todo.push_back(
-                TaskRef{t.task_id, label, r, t.seed, expected_seconds(cost[p]), physics[p]});
+                TaskRef{t.task_id, labels[p], r, t.seed, expected_seconds(cost[p]), physics[p]});
             point_of.push_back(p);
         }
     }

@@ -124,13 +124,13 @@ class Harness {
 
     const store::TaskEntry* entry(int task) const {
         const auto& t = todo_.at(static_cast<std::size_t>(task));
-        return store_.task(t.label, t.realization);
+        return store_.task(t.label(), t.realization);
     }
     // The reason status gives for a failed or erring task ("" when it lists none).
     std::string reason(int task) const {
         const auto& t = todo_.at(static_cast<std::size_t>(task));
         for (const auto& f : store_.status().failures)
-            if (f.label == t.label && f.realization == t.realization) return f.reason;
+            if (f.label == t.label() && f.realization == t.realization) return f.reason;
         return "";
     }
     std::vector<int> order() {
@@ -693,7 +693,7 @@ TEST(MasterDeadline, UnmeasuredEstimatesDoNotKeepTasksFromStarting) {
             return fake_result(t.seed, engine::Status::complete);
         },
         opt);
-    h.set_expected(100.0);  // a guess far beyond the deadline
+    h.set_expected(100.0);   // a guess far beyond the deadline
     h.set_deadline_in(1.5);  // task 1 (50 ms) ends long before deadline - grace (1 s)
     const MasterReport rep = h.run();
     EXPECT_EQ(h.order().size(), 2u);
