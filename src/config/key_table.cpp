@@ -159,6 +159,16 @@ const std::vector<KeyDef> table = {
            },
            [](const P& p) -> Read { return engine::to_string(p.material.normal_law); },
            FP{"material.normal_law", 46, Enters::unless_default}, nullptr, "linear,hertz"},
+    KeyDef{"material", "tangential_law", "material.tangential_law", Kind::choice, 0, 0, closed,
+           closed, "",
+           [](P& p, V v) {
+               using T = engine::TangentialLaw;
+               p.material.tangential_law =
+                   choice_of(v, {T::automatic, T::frictionless, T::viscous, T::spring});
+           },
+           [](const P& p) -> Read { return engine::to_string(p.material.tangential_law); },
+           FP{"material.tangential_law", 67, Enters::unless_default}, nullptr,
+           "auto,frictionless,viscous,spring"},
     KeyDef{"material", "mu_r", "material.mu_r", Kind::real, 0, 1, closed, closed, "",
            [](P& p, V v) { p.material.mu_r = num(v); },
            [](const P& p) -> Read { return p.material.mu_r; },

@@ -1,16 +1,18 @@
 #pragma once
-// The registry of contact laws (issue 28; docs/model.md, "Contact forces"), private to the
+// The registry of contact laws (issues 28, 42; docs/model.md, "Contact forces"), private to the
 // engine: the one list that the kernels (kernel.cpp) and every build of the force pass
-// (force_batch_impl.hpp: the reference and each instruction set's batched pass) instantiate. Adding
-// a law is a value type with evaluate() (contact.hpp has the three of today and their contract) and
-// one entry in `Laws`; nothing else lists laws. A scene's law is chosen once, by System (law_for,
-// system.cpp), as its index in this list.
+// (force_batch_impl.hpp: the reference and each instruction set's batched pass) instantiate.
+// Adding a law is a value type with evaluate() and its `normal` and `tangential` parts
+// (contact.hpp has the contract; law_hertz_viscous.hpp is a law in a file of its own) and one
+// entry in `Laws`; nothing else lists laws. A scene's law is chosen once, by System, as the
+// registered law with the scene's normal and tangential parts (law_for below).
 
 #include <array>
 #include <cstddef>
 #include <type_traits>
 
 #include "hopper/engine/contact.hpp"
+#include "hopper/engine/law_hertz_viscous.hpp"
 
 namespace hopper::engine::detail {
 
@@ -21,7 +23,7 @@ struct LawList {
 
 // The registry. The order is the law's id (law_id<Law>); it is not stored anywhere.
 using Laws = LawList<FrictionlessLaw, ViscousFrictionLaw, SpringFrictionLaw, HertzSpringLaw,
-                     WithRolling<SpringFrictionLaw>, WithRolling<HertzSpringLaw>>;
+                     WithRolling<SpringFrictionLaw>, WithRolling<HertzSpringLaw>, HertzViscousLaw>;
 inline constexpr std::size_t law_count = Laws::size;
 
 namespace laws_impl {
@@ -50,6 +52,26 @@ constexpr auto for_each_law(LawList<L...>, Make make) {
 template <class Make>
 constexpr auto for_each_law(Make make) {
     return for_each_law(Laws{}, make);
+}
+
+// What System needs of a law it did not instantiate: its parts and whether it keeps springs.
+struct LawTraits {
+    NormalLaw normal;
+    TangentialLaw tangential;
+    bool rolling;
+    bool has_history;
+};
+inline constexpr auto law_traits = for_each_law([]<class L>() {
+    return LawTraits{L::normal, L::tangential, law_resists_rolling<L>, L::has_history};
+});
+
+// The id of the registered law with these parts, or -1 when none has them.
+constexpr int law_for(NormalLaw normal, TangentialLaw tangential, bool rolling) {
+    for (std::size_t i = 0; i < law_count; ++i)
+        if (law_traits[i].normal == normal && law_traits[i].tangential == tangential &&
+            law_traits[i].rolling == rolling)
+            return int(i);
+    return -1;
 }
 
 }  // namespace hopper::engine::detail

@@ -41,6 +41,20 @@ std::string to_string(NormalLaw l) {
     return l == NormalLaw::linear ? "linear" : "hertz";
 }
 
+std::string to_string(TangentialLaw l) {
+    switch (l) {
+        case TangentialLaw::automatic:
+            return "auto";
+        case TangentialLaw::frictionless:
+            return "frictionless";
+        case TangentialLaw::viscous:
+            return "viscous";
+        case TangentialLaw::spring:
+            return "spring";
+    }
+    return "?";
+}
+
 double hertz_restitution(double alpha) {
     // RK4 from first contact (xi = 0, xi' = 1) until xi is back at 0; the crossing is located by
     // linear interpolation between the two steps that bracket it. A collision so damped that it
@@ -298,7 +312,18 @@ void validate_law_choices(const SceneParams& p) {
         throw ConfigError("parameter material.mu_r = " + std::to_string(m.mu_r) +
                           " needs the tangential spring of friction (material.kt_over_kn > 0 "
                           "and material.mu or walls.mu > 0): rolling resistance acts on rolling");
-    if (m.normal_law == NormalLaw::hertz && !(m.kt_over_kn > 0.0))
+    const TangentialLaw t = m.tangential_law;
+    const bool spring_law = t == TangentialLaw::automatic || t == TangentialLaw::spring;
+    if (m.mu_r > 0.0 && !spring_law)
+        throw ConfigError("parameter material.mu_r = " + std::to_string(m.mu_r) +
+                          " needs material.tangential_law = spring or auto (rolling resistance "
+                          "comes with the spring laws), not " +
+                          to_string(t));
+    if (t == TangentialLaw::spring && m.normal_law == NormalLaw::linear && !(m.kt_over_kn > 0.0))
+        throw ConfigError("parameter material.kt_over_kn = " + std::to_string(m.kt_over_kn) +
+                          " is out of range with material.tangential_law = spring: allowed (0, 10] "
+                          "(the spring's stiffness; 0 is the viscous law)");
+    if (m.normal_law == NormalLaw::hertz && spring_law && !(m.kt_over_kn > 0.0))
         throw ConfigError(
             "parameter material.kt_over_kn = " + std::to_string(m.kt_over_kn) +
             " is out of range with material.normal_law = hertz: allowed (0, 10] (the Hertz law's "

@@ -71,6 +71,7 @@ SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants&
                    spring_only};
     sc.wall = {c.k_n, c.gamma_n_wall, c.k_t, c.gamma_n_wall * gt, p.material.wall.mu, spring_only};
     sc.normal_law = p.material.normal_law;
+    sc.tangential_law = p.material.tangential_law;
     sc.rolling = p.material.mu_r > 0.0;
     sc.particle.mu_r = sc.wall.mu_r = p.material.mu_r;
     sc.plate_decel = p.material.plate_friction * p.gravity;

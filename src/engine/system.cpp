@@ -41,23 +41,39 @@ System::System(const SystemConfig& config) : config_(config) {
         throw core::ConfigError(
             "System: particle-particle and particle-wall contacts must both have k_t > 0 or both "
             "k_t = 0");
-    // One-time dispatch (style.md): frictionless contacts exert no torque, so rotation is not
-    // integrated at all; k_t = 0 needs no spring history.
-    history_ = friction && spring;
-    // The Hertz law is named by the scene; among the linear ones the cheapest that is exact for
-    // its coefficients is taken (no friction: no torque to integrate; k_t = 0: no spring).
-    // Rolling resistance takes the spring laws' rolling variants.
+    // One-time dispatch (style.md): the law is the registered one with the scene's normal and
+    // tangential parts (laws.hpp). Frictionless contacts exert no torque, so rotation is not
+    // integrated at all; a law without a spring keeps no history.
     const bool hertz = config_.normal_law == NormalLaw::hertz;
-    if (config_.rolling && !hertz && !(friction && spring))
+    TangentialLaw tangential = config_.tangential_law;
+    if (tangential == TangentialLaw::automatic) {
+        // Inferred as before the setting existed: the cheapest law that is exact for the
+        // coefficients (no friction: no torque to integrate; k_t = 0: no spring); the Hertz law
+        // and rolling resistance take the spring.
+        if (config_.rolling && !hertz && !(friction && spring))
+            throw core::ConfigError(
+                "System: rolling resistance needs tangential springs (k_t > 0 and mu > 0)");
+        tangential = hertz || config_.rolling ? TangentialLaw::spring
+                     : !friction              ? TangentialLaw::frictionless
+                     : !spring                ? TangentialLaw::viscous
+                                              : TangentialLaw::spring;
+    }
+    if (tangential == TangentialLaw::spring && !hertz && !spring)
         throw core::ConfigError(
-            "System: rolling resistance needs tangential springs (k_t > 0 and mu > 0)");
-    if (hertz) history_ = true;
-    const int law = hertz ? (config_.rolling ? detail::law_id<WithRolling<HertzSpringLaw>>
-                                             : detail::law_id<HertzSpringLaw>)
-                    : config_.rolling ? detail::law_id<WithRolling<SpringFrictionLaw>>
-                    : !friction       ? detail::law_id<FrictionlessLaw>
-                    : !spring         ? detail::law_id<ViscousFrictionLaw>
-                                      : detail::law_id<SpringFrictionLaw>;
+            "System: material.tangential_law = spring needs a tangential spring: k_t > 0 "
+            "(material.kt_over_kn > 0; it is 0)");
+    const int law = detail::law_for(config_.normal_law, tangential, config_.rolling);
+    if (law < 0) {
+        std::string have;
+        for (const auto& t : detail::law_traits)
+            have += std::string(have.empty() ? "" : "; ") + to_string(t.normal) + " with " +
+                    to_string(t.tangential) + (t.rolling ? " and rolling resistance" : "");
+        throw core::ConfigError(
+            "System: no contact law has the normal law '" + to_string(config_.normal_law) +
+            "' with the tangential law '" + to_string(tangential) + "'" +
+            (config_.rolling ? " and rolling resistance" : "") + "; the laws are: " + have);
+    }
+    history_ = detail::law_traits[static_cast<std::size_t>(law)].has_history;
     kernel_ = detail::make_kernel(law, config_.scheme);
     kernel_path_ = config_.kernel == KernelPath::reference ? KernelPath::reference
                                                            : detail::resolve_kernel(config_.kernel);

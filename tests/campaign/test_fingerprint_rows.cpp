@@ -172,6 +172,9 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
         l.add("material.plate_friction", p.material.plate_friction);
     if (p.material.plate_speed != d.material.plate_speed)
         l.add("material.plate_speed_m_s", p.material.plate_speed);
+    // The tangential law named (issue 42): only off its default, automatic.
+    if (p.material.tangential_law != d.material.tangential_law)
+        l.add("material.tangential_law", engine::to_string(p.material.tangential_law));
     return l.take();
 }
 

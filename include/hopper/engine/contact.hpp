@@ -1,13 +1,15 @@
 #pragma once
 // Contact laws (docs/model.md, "Contact forces"). Each law is a small value type whose
 // evaluate() is pure and inline; the force pass (force_batch_impl.hpp) is a template over the
-// law, so the choice of law (frictionless / viscous friction / Cundall-Strack spring) is made
-// once at setup and never per contact.
+// law, so the choice of law is made once at setup and never per contact. Each names its normal
+// and tangential parts (`normal`, `tangential`): a scene's material.normal_law and
+// material.tangential_law pick the registered law (laws.hpp) that has both.
 
 #include <algorithm>
 #include <cmath>
 
 #include "hopper/core/vec.hpp"
+#include "hopper/engine/params.hpp"
 
 // The laws are tiny and called once per contact per step: force inlining into the pair loops.
 #if defined(__GNUC__)
@@ -83,9 +85,31 @@ struct ContactOutput {
     double ftx, fty;  // tangential force
 };
 
+// Viscous ("kinetic") friction of a contact whose normal force is fn, shared by the laws without
+// a spring: F_t* = -gm v_t with gm the tangential dashpot's coefficient (kg/s), capped at
+// mu |F_n|. No contact history.
+template <bool Select>
+HOPPER_HOT_INLINE ContactOutput viscous_tangential(const ContactParams& p, const ContactInput& c,
+                                                   double v_n, double fn, double gm) {
+    const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
+    const double g = -gm;
+    double ftx = g * vtx, fty = g * vty;
+    const double cap = p.mu * std::abs(fn);  // mu |F_n|
+    const double ft2 = ftx * ftx + fty * fty;
+    const bool slip = ft2 > cap * cap;
+    if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
+        const double scale = cap / std::sqrt(ft2);  // used only where ft2 > cap^2 >= 0
+        ftx = slip ? ftx * scale : ftx;
+        fty = slip ? fty * scale : fty;
+    }
+    return {fn, ftx, fty};
+}
+
 // Frictionless contacts (mu = 0 everywhere): no tangential force, hence no torque and no
 // rotation to integrate.
 struct FrictionlessLaw {
+    static constexpr NormalLaw normal = NormalLaw::linear;
+    static constexpr TangentialLaw tangential = TangentialLaw::frictionless;
     static constexpr bool has_tangential = false;
     static constexpr bool has_history = false;
     template <bool Select = false>
@@ -104,6 +128,8 @@ struct FrictionlessLaw {
 // k_t = 0: viscous ("kinetic") friction only, F_t* = -gamma_t mbar v_t, capped at mu |F_n|.
 // No spring, so no contact history is kept at all.
 struct ViscousFrictionLaw {
+    static constexpr NormalLaw normal = NormalLaw::linear;
+    static constexpr TangentialLaw tangential = TangentialLaw::viscous;
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = false;
     template <bool Select = false>
@@ -111,18 +137,7 @@ struct ViscousFrictionLaw {
                                                     double& /*hx*/, double& /*hy*/) {
         const double v_n = c.vx * c.nx + c.vy * c.ny;
         const double fn = normal_magnitude(p, c.mbar, c.overlap, v_n);
-        const double vtx = c.vx - v_n * c.nx, vty = c.vy - v_n * c.ny;
-        const double g = -p.gamma_t * c.mbar;
-        double ftx = g * vtx, fty = g * vty;
-        const double cap = p.mu * std::abs(fn);  // mu |F_n|
-        const double ft2 = ftx * ftx + fty * fty;
-        const bool slip = ft2 > cap * cap;
-        if (Select || slip) {  // Select: branch-free, both sides evaluated (SIMD batches)
-            const double scale = cap / std::sqrt(ft2);  // used only where ft2 > cap^2 >= 0
-            ftx = slip ? ftx * scale : ftx;
-            fty = slip ? fty * scale : fty;
-        }
-        return {fn, ftx, fty};
+        return viscous_tangential<Select>(p, c, v_n, fn, p.gamma_t * c.mbar);
     }
     HOPPER_HOT_INLINE static ContactForce evaluate(const ContactParams& p, double mbar,
                                                    const Vec2& n, double overlap, const Vec2& v_ij,
@@ -178,6 +193,8 @@ HOPPER_HOT_INLINE ContactOutput tangential_spring(const ContactParams& p, const 
 
 // Cundall-Strack static friction with the linear normal force (tangential_spring above).
 struct SpringFrictionLaw {
+    static constexpr NormalLaw normal = NormalLaw::linear;
+    static constexpr TangentialLaw tangential = TangentialLaw::spring;
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
     template <bool Select = false>
@@ -199,6 +216,8 @@ struct SpringFrictionLaw {
 // contact's, k_t = hertz_kt_ratio (3/2) K x^(1/2), with the damping hertz_gt_ratio times the
 // normal one and the Coulomb cap and slip rule of SpringFrictionLaw.
 struct HertzSpringLaw {
+    static constexpr NormalLaw normal = NormalLaw::hertz;
+    static constexpr TangentialLaw tangential = TangentialLaw::spring;
     static constexpr bool has_tangential = true;
     static constexpr bool has_history = true;
     static constexpr bool needs_rstar = true;

@@ -45,6 +45,17 @@ enum class NormalLaw {
     hertz,   // F_n = K x^(3/2) - alpha sqrt(mbar K) x^(1/4) v_n, K from Y and sigma
 };
 
+// The tangential force law (docs/model.md, "Contact forces"; issue 42): named by
+// material.tangential_law, or inferred from the coefficients (automatic, the default).
+enum class TangentialLaw {
+    automatic,     // frictionless when mu = 0, viscous when k_t = 0, else spring (the Hertz law:
+                   // spring); the choice before the setting existed
+    frictionless,  // no tangential force (mu is not used)
+    viscous,       // kinetic friction only: F_t = -gamma_t mbar v_t, capped at mu |F_n|; no spring
+    spring,        // a Cundall-Strack spring and dashpot, capped at mu |F_n| (k_t constant with the
+                   // linear normal law, following the normal stiffness with the Hertz law)
+};
+
 // How gamma_n follows from e_n.
 enum class NormalDamping {
     nominal,            // gamma_n = -2 ln(e_n) / tau_c (the specification; the default)
@@ -72,6 +83,7 @@ std::string to_string(SlipRule r);
 std::string to_string(LeverArm a);
 std::string to_string(NormalDamping d);
 std::string to_string(NormalLaw l);
+std::string to_string(TangentialLaw l);
 
 struct HopperGeometry {
     double width = 43.0 * cm;           // W: total inner width between the side walls
@@ -119,6 +131,7 @@ struct MaterialParams {
     LeverArm lever_arm = LeverArm::radius;
     NormalDamping normal_damping = NormalDamping::nominal;
     NormalLaw normal_law = NormalLaw::linear;
+    TangentialLaw tangential_law = TangentialLaw::automatic;
     // Rolling resistance (issue 28): the coefficient of the torque mu_r R* |F_n| against the
     // relative rolling of two touching disks (particles and walls); 0 = none.
     double mu_r = 0.0;

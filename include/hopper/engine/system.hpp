@@ -61,9 +61,11 @@ struct SystemConfig {
     // biases of a collision smaller at a given time step (docs/accuracy.md).
     bool contact_corrections = false;
     KernelPath kernel = KernelPath::automatic;
-    // The normal law (params.hpp): hertz takes HertzSpringLaw, with the hertz_* coefficients of
-    // the ContactParams above.
+    // The contact law, by its normal and tangential parts (params.hpp): System takes the law of
+    // the registry (laws.hpp) that has both; hertz uses the hertz_* coefficients of the
+    // ContactParams above. automatic: inferred from the coefficients (TangentialLaw).
     NormalLaw normal_law = NormalLaw::linear;
+    TangentialLaw tangential_law = TangentialLaw::automatic;
     // Rolling resistance (ContactParams::mu_r > 0): the registry's WithRolling variant of the law.
     bool rolling = false;
     // Plate friction (MaterialParams::plate_friction): a force of m plate_decel against each
