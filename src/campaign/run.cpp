@@ -312,41 +312,43 @@ bool has_result(store::TaskState s) {
 
 // What to run: the planned tasks with no result yet (pending, or left in error), the most
 // expensive first (ties in task order); none with a target (the rounds decide). `totals`
-// counts the planned and the stored.
+// counts the planned and the stored. Built in its final order, points by cost (stable), each
+// point's realizations in order, and reserved once: at 10^6 tasks a list sorted afterwards was
+// the master's peak memory (two lists and their index vectors at once; issue 44).
 std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
                                   const std::vector<int>& planned, const std::vector<double>& cost,
                                   const std::vector<std::uint64_t>& physics, Totals& totals) {
     const auto& spec = c.sweep.campaign;
-    std::vector<TaskRef> todo;
-    std::vector<std::size_t> point_of;  // todo's points, for the order
-    const auto labels = shared_labels(spec);
+    std::vector<std::size_t> points(spec.points.size());
+    std::iota(points.begin(), points.end(), std::size_t{0});
+    std::stable_sort(points.begin(), points.end(),
+                     [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
+    std::size_t pending = 0;
     for (std::size_t p = 0; p < spec.points.size(); ++p) {
-        const auto& label = spec.points[p].label;
         totals.total += planned[p];
         for (int r = 0; r < planned[p]; ++r) {
-            const store::TaskState state = task_state(st, label, r);
+            const store::TaskState state = task_state(st, spec.points[p].label, r);
             if (has_result(state)) {
                 ++totals.finished;
                 if (state == store::TaskState::failed) ++totals.failed;
-                continue;
+            } else {
+                ++pending;
             }
-            if (spec.target) continue;  // the rounds decide what runs (run_rounds)
+        }
+    }
+    std::vector<TaskRef> todo;
+    if (spec.target) return todo;  // the rounds decide what runs (run_rounds)
+    todo.reserve(pending);
+    const auto labels = shared_labels(spec);
+    for (const std::size_t p : points) {
+        for (int r = 0; r < planned[p]; ++r) {
+            if (has_result(task_state(st, spec.points[p].label, r))) continue;
             const config::Task t = c.tasks.at(static_cast<int>(p), r);
             todo.push_back(
                 TaskRef{t.task_id, labels[p], r, t.seed, expected_seconds(cost[p]), physics[p]});
-            point_of.push_back(p);
         }
     }
-    std::vector<std::size_t> order(todo.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return cost[point_of[a]] > cost[point_of[b]];
-    });
-    std::vector<TaskRef> sorted;
-    sorted.reserve(todo.size());
-    for (const std::size_t i : order)
-        sorted.push_back(std::move(todo[i]));
-    return sorted;
+    return todo;
 }
 
 void announce(std::ostream& err, const fs::path& store_path, bool resumed, const Campaign& c,
