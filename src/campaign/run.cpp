@@ -1,9 +1,6 @@
 #include "hopper/campaign/run.hpp"
 
 #include <unistd.h>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include <algorithm>
 #include <atomic>
@@ -28,6 +25,7 @@
 #include "hopper/campaign/signals.hpp"
 #include "hopper/campaign/worker.hpp"
 #include "hopper/core/error.hpp"
+#include "hopper/core/memory.hpp"
 
 namespace hopper::campaign {
 
@@ -44,16 +42,6 @@ std::string compiler_id() {
 }
 
 namespace {
-
-// Gives the memory the setup freed (the parsed sweep's temporaries, the encoded plan of the run's
-// first journal record) back to the system before the master settles into dispatching for
-// hours: glibc keeps freed blocks in the process otherwise (issue 44: the master's resident
-// memory at 10^6 realizations is what the setup left behind, flat through the run).
-void release_free_memory() {
-#if defined(__GLIBC__)
-    malloc_trim(0);
-#endif
-}
 
 // The points' labels, one shared copy each for their tasks (TaskRef).
 std::vector<std::shared_ptr<const std::string>> shared_labels(const config::CampaignSpec& spec) {
@@ -447,7 +435,9 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     if (resumed) measured_cost(mo, c, st, cost);
     if (mo.deadline) announce_deadline(err, mo);
 
-    release_free_memory();
+    // What the setup freed (the parsed sweep's temporaries, the encoded plan of the run's first
+    // journal record) goes back to the system before the master settles into dispatching.
+    core::release_free_memory();
     state->dispatching = true;
     Master master(channel, st, signals, mo, err);
     const MasterReport rep =
