@@ -301,8 +301,8 @@ bool has_result(store::TaskState s) {
 // What to run: the planned tasks with no result yet (pending, or left in error), the most
 // expensive first (ties in task order); none with a target (the rounds decide). `totals`
 // counts the planned and the stored. Built in its final order, points by cost (stable), each
-// point's realizations in order, and reserved once: at 10^6 tasks a list sorted afterwards was
-// the master's peak memory (two lists and their index vectors at once; issue 44).
+// point's realizations in order, with one look at each task: at 10^6 tasks a list sorted
+// afterwards held two lists and their index vectors at once (issue 44).
 std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
                                   const std::vector<int>& planned, const std::vector<double>& cost,
                                   const std::vector<std::uint64_t>& physics, Totals& totals) {
@@ -311,26 +311,18 @@ std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
     std::iota(points.begin(), points.end(), std::size_t{0});
     std::stable_sort(points.begin(), points.end(),
                      [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
-    std::size_t pending = 0;
-    for (std::size_t p = 0; p < spec.points.size(); ++p) {
+    const auto labels = shared_labels(spec);
+    std::vector<TaskRef> todo;
+    for (const std::size_t p : points) {
         totals.total += planned[p];
         for (int r = 0; r < planned[p]; ++r) {
             const store::TaskState state = task_state(st, spec.points[p].label, r);
             if (has_result(state)) {
                 ++totals.finished;
                 if (state == store::TaskState::failed) ++totals.failed;
-            } else {
-                ++pending;
+                continue;
             }
-        }
-    }
-    std::vector<TaskRef> todo;
-    if (spec.target) return todo;  // the rounds decide what runs (run_rounds)
-    todo.reserve(pending);
-    const auto labels = shared_labels(spec);
-    for (const std::size_t p : points) {
-        for (int r = 0; r < planned[p]; ++r) {
-            if (has_result(task_state(st, spec.points[p].label, r))) continue;
+            if (spec.target) continue;  // the rounds decide what runs (run_rounds)
             const config::Task t = c.tasks.at(static_cast<int>(p), r);
             todo.push_back(
                 TaskRef{t.task_id, labels[p], r, t.seed, expected_seconds(cost[p]), physics[p]});
