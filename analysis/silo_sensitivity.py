@@ -2,8 +2,8 @@
 """The flat silo's sensitivity map (issue 39, docs/validation.md "Sensitivity"): each lever's
 effect on ln(<s>+1) per outlet and on the slope b.
 
-usage: silo_sensitivity.py STORE.h5[@LEVER] [...] [--baseline JSON_OR_STORE] [--json F] [--md F]
-                           [--png F]
+usage: silo_sensitivity.py STORE.h5[@LEVER]|EARLIER.json [...] [--baseline JSON_OR_STORE]
+                           [--json F] [--md F] [--png F]
 
 Every point of the stores is one lever setting at one outlet: its lever is the point's label
 less the outlet and the angle (`material.mu_r=0.1`; a point with nothing else is "baseline");
@@ -16,6 +16,9 @@ baseline at the same outlet (the arch-removal campaign of docs/validation.md: by
 docs/figures/silo_validation.json's rows; or another store, or the points labelled baseline):
 the difference dy and its z = dy / sqrt(sigma^2 + sigma_base^2). A lever with 3 or more outlets
 of 5+ clogs gets its own fit of ln(<s>+1) = a + b (D/d)^2 (silo_validation.fit).
+EARLIER.json (this script's --json of an earlier call) brings in the rows measured then, whose
+stores may be gone (a machine's scratch space): each is kept as it was, unless a store given
+here has the same lever at the same outlet; rows that were still waiting are left out.
 """
 import argparse
 import json
@@ -214,7 +217,13 @@ def main():
     for p, _ in stores:
         if not os.path.exists(p):
             sys.exit("silo_sensitivity.py: no store %s" % p)
-    rows = [r for p, common in stores for r in rows_of(p, common)]
+    rows = [r for p, common in stores if not p.endswith(".json") for r in rows_of(p, common)]
+    have = {(r["lever"], round(r["D_over_d"], 3)) for r in rows}
+    for p, _ in stores:
+        if p.endswith(".json"):
+            with open(p) as fh:
+                earlier = [r for r in json.load(fh)["rows"] if r["realizations"]]
+            rows += [r for r in earlier if (r["lever"], round(r["D_over_d"], 3)) not in have]
     base = baseline_rows(a.baseline, rows)
     rows = compare(rows, base)
     fits = lever_fits(rows)

@@ -178,6 +178,10 @@ void Dispatcher::send_task(const Item& item) {
             if (!refusal.empty()) log_ << "campaign: " << refusal << std::endl;
         }
     }
+    // Journaled before it is sent: a run that dies tells what was running (issue 44).
+    const TaskRef& t = todo_[item.index];
+    store_.dispatched(
+        store::DispatchRecord{t.label(), t.realization, t.seed, w, item.attempt, b.started_unix});
     channel_.send(w, task);
     busy_[w] = b;
 }

@@ -146,10 +146,44 @@ void allot_round(store::Store& st, const Campaign& c, const RoundState& rs) {
     st.allot(rec);
 }
 
+// A realization that was running each time its run died, max_deaths times (TaskEntry::deaths;
+// 0: no limit), is taken for what killed it: a worker killed by the kernel's OOM killer under a
+// memory limit takes the whole job with it, and would again in every run that hands it out.
+// It is set aside: recorded once as an error with the reason (campaign status lists it, the run
+// ends with exit 3) and not handed out; --max-deaths hands it out again (issue 44).
+bool set_aside(store::Store& st, const std::string& label, int r, std::uint64_t seed,
+               int max_deaths) {
+    const store::TaskEntry* e = st.task(label, r);
+    if (max_deaths <= 0 || !e || e->deaths < max_deaths) return false;
+    if (e->state != store::TaskState::error) {
+        const std::string n = std::to_string(e->deaths);
+        st.append(store::ErrorRecord{
+            label, r, seed, 0, e->errors + 1, store::unix_now(),
+            "set aside: the job died each of the " + n +
+                " times this realization was running "
+                "(its process killed, by the kernel's OOM killer under a memory limit, a crash, a "
+                "lost node or a kill -9), so it is not handed out again. Run it alone to see what "
+                "it needs (campaign simulate --store " +
+                st.path().string() + " --point '" + label + "' --realization " + std::to_string(r) +
+                "), then resume with --max-deaths " + std::to_string(e->deaths + 1) +
+                " (or 0: no limit) to hand it out again"});
+    }
+    return true;
+}
+
+void announce_set_aside(std::ostream& err, int n, int max_deaths) {
+    if (n > 0)
+        err << "campaign: " << n << " realization(s) set aside: each was running every time "
+            << "the job died, " << max_deaths << " times or more (--max-deaths " << max_deaths
+            << "; killed with its worker, by the kernel for memory?); see `campaign status`"
+            << std::endl;
+}
+
 // A campaign with a target (adaptive.hpp): rounds until no point needs more. Each round's
 // decisions are replayed from the journal, so an interrupted run resumes the same sequence.
 MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
-                        const std::vector<double>& cost, Totals totals, std::ostream& err) {
+                        const std::vector<double>& cost, int max_deaths, Totals totals,
+                        std::ostream& err) {
     const auto& spec = c.sweep.campaign;
     const auto quantity = spec.target->quantity;
     const fs::path& store_path = st.path();
@@ -168,8 +202,13 @@ MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
         allot_round(st, c, rs);
         std::vector<TaskRef> todo;
         const auto labels = shared_labels(spec);
+        int aside = 0;
         for (const auto& [p, i] : rs.missing) {
             const config::Task t = c.tasks.at(p, i);
+            if (set_aside(st, spec.points[std::size_t(p)].label, i, t.seed, max_deaths)) {
+                ++aside;
+                continue;
+            }
             todo.push_back(TaskRef{t.task_id, labels[std::size_t(p)], i, t.seed,
                                    expected_seconds(cost[std::size_t(p)])});
         }
@@ -182,10 +221,11 @@ MasterReport run_rounds(Master& master, const Campaign& c, store::Store& st,
             << ", relative 95 % half-width <= " << spec.target->rel_half_width
             << "): " << todo.size() << " realization(s) to run\n"
             << describe_rounds(rs, quantity) << std::flush;
+        announce_set_aside(err, aside, max_deaths);
         const MasterReport r = master.run(todo, totals);
         add_round(all, r);
         if (r.stopped || !r.fail_fast.empty()) break;
-        if (r.gave_up > 0 || r.stored == 0) {
+        if (r.gave_up > 0 || r.stored == 0 || aside > 0) {
             err << "campaign: round " << rs.round + 1 << " is incomplete (realizations left in "
                 << "error); run the same command again to retry them and go on" << std::endl;
             break;
@@ -299,13 +339,15 @@ bool has_result(store::TaskState s) {
 }
 
 // What to run: the planned tasks with no result yet (pending, or left in error), the most
-// expensive first (ties in task order); none with a target (the rounds decide). `totals`
-// counts the planned and the stored. Built in its final order, points by cost (stable), each
-// point's realizations in order, with one look at each task: at 10^6 tasks a list sorted
-// afterwards held two lists and their index vectors at once (issue 44).
-std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
+// expensive first (ties in task order), less those set aside; none with a target (the rounds
+// decide). `totals` counts the planned and the stored (and the set aside, as failed). Built in its
+// final order, points by cost (stable), each point's realizations in order, with one look at each
+// task: at 10^6 tasks a list sorted afterwards held two lists and their index vectors at once
+// (issue 44).
+std::vector<TaskRef> tasks_to_run(const Campaign& c, store::Store& st,
                                   const std::vector<int>& planned, const std::vector<double>& cost,
-                                  const std::vector<std::uint64_t>& physics, Totals& totals) {
+                                  const std::vector<std::uint64_t>& physics, int max_deaths,
+                                  Totals& totals, std::ostream& err) {
     const auto& spec = c.sweep.campaign;
     std::vector<std::size_t> points(spec.points.size());
     std::iota(points.begin(), points.end(), std::size_t{0});
@@ -313,6 +355,7 @@ std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
                      [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
     const auto labels = shared_labels(spec);
     std::vector<TaskRef> todo;
+    int aside = 0;
     for (const std::size_t p : points) {
         totals.total += planned[p];
         for (int r = 0; r < planned[p]; ++r) {
@@ -324,10 +367,17 @@ std::vector<TaskRef> tasks_to_run(const Campaign& c, const store::Store& st,
             }
             if (spec.target) continue;  // the rounds decide what runs (run_rounds)
             const config::Task t = c.tasks.at(static_cast<int>(p), r);
+            if (set_aside(st, spec.points[p].label, r, t.seed, max_deaths)) {
+                ++aside;
+                ++totals.finished;
+                ++totals.failed;
+                continue;
+            }
             todo.push_back(
                 TaskRef{t.task_id, labels[p], r, t.seed, expected_seconds(cost[p]), physics[p]});
         }
     }
+    announce_set_aside(err, aside, max_deaths);
     return todo;
 }
 
@@ -412,7 +462,8 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
         cost[p] = expected_cost(spec.points[p].scene);
     const std::vector<int> planned = planned_realizations(c, st);
     Totals totals;
-    const std::vector<TaskRef> todo = tasks_to_run(c, st, planned, cost, physics, totals);
+    const std::vector<TaskRef> todo =
+        tasks_to_run(c, st, planned, cost, physics, opt.max_deaths, totals, err);
     announce(err, store_path, resumed, c, totals, todo.size(), channel.workers());
 
     MasterOptions mo = opt.master;
@@ -432,8 +483,9 @@ int run_master(const RunOptions& opt, const Campaign& c, MasterChannel& channel,
     core::release_free_memory();
     state->dispatching = true;
     Master master(channel, st, signals, mo, err);
-    const MasterReport rep =
-        spec.target ? run_rounds(master, c, st, cost, totals, err) : master.run(todo, totals);
+    const MasterReport rep = spec.target
+                                 ? run_rounds(master, c, st, cost, opt.max_deaths, totals, err)
+                                 : master.run(todo, totals);
     state->dispatching = false;
     state->silent_workers = rep.silent_at_end;
 

@@ -89,7 +89,9 @@ int finish_run(store::Store& st, const config::CampaignSpec& spec, const config:
         case Ending::with_failures:
             err << "campaign: finished with " << o.failed
                 << " failed realization(s); see `campaign status " << ctx.store_path.string()
-                << "`. Exceptions are retried by running the same command again." << std::endl;
+                << "`. Exceptions are retried by running the same command again (a realization set "
+                << "aside after the job died with it running: with a higher --max-deaths)."
+                << std::endl;
             return run_with_failures;
         case Ending::complete:
             break;

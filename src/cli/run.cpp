@@ -67,6 +67,11 @@ po::options_description run_options() {
         ("checkpoint-interval", po::value<std::string>()->value_name("S"),
          "seconds of wall time between checkpoints of each running realization, written beside "
          "the store in STORE.checkpoints/ (default 600; 0 = only when a realization is stopped)")  //
+        ("max-deaths", po::value<std::string>()->value_name("N"),
+         "a realization that was running each of the last N times the job died (its processes "
+         "killed: the kernel's OOM killer under a memory limit, a crash, a lost node) is set "
+         "aside, recorded as an error with the reason and not handed out again; 0 = no limit "
+         "(default 3)")  //
         ("no-checkpoints", po::bool_switch(),
          "no checkpoints: a stopped realization starts over in the next run")  //
         ("dry-run", po::bool_switch(),
@@ -91,7 +96,8 @@ void print_run_help(std::ostream& os) {
     os << "usage: campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S]\n"
           "                    [--threads N] [--flush-interval S] [--worker-timeout S]\n"
           "                    [--deadline T] [--checkpoint-interval S] [--no-checkpoints]\n"
-          "                    [--dry-run] [--no-file-locking] [--allow-mixed] [--no-plots]\n"
+          "                    [--max-deaths N] [--dry-run] [--no-file-locking]\n"
+          "                    [--allow-mixed] [--no-plots]\n"
           "       mpirun -np N campaign run SWEEP.toml ...\n\n"
           "Runs the campaign of the sweep file, or resumes it: only realizations missing from\n"
           "the store run. Under mpirun rank 0 hands out realizations and writes the store, the\n"
@@ -167,6 +173,14 @@ int run_command(const std::vector<std::string>& args, const std::string& command
             throw core::ConfigError("--worker-timeout must be at least 0.2 (seconds), got '" + t +
                                     "'");
         opt.master.worker_timeout = v;
+    }
+    if (vm.count("max-deaths")) {
+        const std::string& t = vm["max-deaths"].as<std::string>();
+        const std::uint64_t n = parse_seed("--max-deaths", t);
+        if (n > 255)
+            throw core::ConfigError("--max-deaths must be between 0 (no limit) and 255, got '" + t +
+                                    "'");
+        opt.max_deaths = static_cast<int>(n);
     }
     if (vm.count("threads")) {
         const std::string& t = vm["threads"].as<std::string>();

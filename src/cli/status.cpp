@@ -137,6 +137,7 @@ std::string status_json(const store::StoreStatus& s) {
     j["done"] = s.done;
     j["failed"] = s.failed;
     j["errors"] = s.errors;
+    j["died"] = s.died;  // of the errors: running when their job died (--max-deaths)
     j["pending"] = s.pending;
     const ProgressEstimate pe = estimate_progress(s, store::unix_now());
     j["per_hour"] = json_number(pe.per_hour);
@@ -187,6 +188,7 @@ std::string status_json(const store::StoreStatus& s) {
         o["workers"] = r.info.workers;
         o["hosts"] = r.info.hosts;
         o["stored"] = r.stored;
+        o["running_when_died"] = r.end ? Json(nullptr) : Json(r.died_running);
         o["lost_worker_seconds"] = json_number(r.end ? r.end->lost_worker_seconds : 0.0);
         o["saved_worker_seconds"] = json_number(r.end ? r.end->saved_worker_seconds : 0.0);
         runs.push_back(std::move(o));
@@ -208,7 +210,13 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
                                "run` rebuilds it from the journal")
         << '\n';
     out << "progress  " << s.done << "/" << s.total << " done, " << s.failed << " failed";
-    if (s.errors) out << " (" << s.errors << " by exceptions, retried by the next run)";
+    if (s.errors) {
+        out << " (" << s.errors << " in error, retried by the next run";
+        if (s.died)
+            out << "; " << s.died << " of them were running when their job died: those set "
+                << "aside after --max-deaths deaths are handed out only with a higher limit";
+        out << ")";
+    }
     out << ", " << s.pending << " pending\n";
     const ProgressEstimate pe = estimate_progress(s, store::unix_now());
     if (!s.runs.empty()) {
@@ -247,8 +255,10 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
         const auto& r = s.runs.back();
         out << "runs      " << s.runs.size() << "; last started " << r.info.start_time << " on "
             << r.info.mpi_size << " process(es) (" << hosts_text(r.info.hosts) << "), "
-            << (r.end ? "ended " + r.end->end_time + " (" + r.end->reason + ")"
-                      : std::string(s.writer_active ? "running" : "did not end (killed?)"))
+            << (r.end             ? "ended " + r.end->end_time + " (" + r.end->reason + ")"
+                : s.writer_active ? std::string("running")
+                                  : "did not end (killed?) while running " +
+                                        std::to_string(r.died_running) + " realization(s)")
             << ", stored " << r.stored << '\n';
         if (r.end && (r.end->lost_worker_seconds > 0 || r.end->saved_worker_seconds > 0))
             out << "          its interrupted realizations: "

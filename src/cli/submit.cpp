@@ -95,6 +95,9 @@ po::options_description submit_options() {
          "state every S s; 0 = only when stopped)")  //
         ("no-checkpoints", po::bool_switch(),
          "campaign run --no-checkpoints (a realization stopped at the limit starts over)")  //
+        ("max-deaths", po::value<std::string>()->value_name("N"),
+         "campaign run --max-deaths N (default 3: a realization running each of the last 3 "
+         "times the job died, killed for memory, is set aside; 0 = no limit)")  //
         ("deadline", po::value<std::string>()->value_name("D"),
          "slurm (default: campaign run --deadline slurm-(LEAD-GRACE): it starts no realization "
          "expected to end after the moment the warning signal is due, and stops running ones "
@@ -266,7 +269,8 @@ void print_submit_help(std::ostream& os) {
           "                       [--sbatch-arg ARG]... [--launcher-arg ARG]...\n"
           "                       [--master-slot shared|own] [--threads N]\n"
           "                       [--checkpoint-interval S] [--no-checkpoints]\n"
-          "                       [--deadline slurm|none] [--store PATH] [--dry-run]\n\n"
+          "                       [--max-deaths N] [--deadline slurm|none] [--store PATH]\n"
+          "                       [--dry-run]\n\n"
           "Submits the campaign of a sweep file to Slurm. The batch script (written next to the\n"
           "store as STORE.sbatch, its log STORE.slurm.log) runs `campaign run` under srun or\n"
           "mpirun, asks Slurm for SIGUSR1 before the time limit, drains on it (running\n"
@@ -456,6 +460,13 @@ int submit_command(const std::vector<std::string>& args) {
         std::ostringstream t;
         t << ci;
         add_run("--checkpoint-interval " + t.str());
+    }
+    if (vm.count("max-deaths")) {
+        const std::string& t = vm["max-deaths"].as<std::string>();
+        const std::uint64_t n = parse_seed("--max-deaths", t);
+        if (n > 255)
+            throw ConfigError("--max-deaths must be between 0 (no limit) and 255, got '" + t + "'");
+        add_run("--max-deaths " + std::to_string(n));
     }
     {
         // The run's deadline: when Slurm's warning signal is due (the end time minus the lead)

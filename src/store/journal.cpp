@@ -141,7 +141,7 @@ JournalScan scan_fd(int fd, const fs::path& path, const RecordVisitor& visit) {
             break;
         }
         const std::uint8_t type = h[4];
-        if (type < 1 || type > 6)
+        if (type < 1 || type > 7)
             throw core::StoreError(where + ": unknown record type " + std::to_string(type) +
                                    " at byte " + std::to_string(pos) +
                                    " (written by a newer version?)");

@@ -245,6 +245,30 @@ ErrorRecord decode_error(std::span<const std::uint8_t> b) {
     return r;
 }
 
+Bytes encode(const DispatchRecord& r) {
+    ByteWriter w;
+    w.str(r.label);
+    w.i32(r.realization);
+    w.u64(r.seed);
+    w.i32(r.rank);
+    w.i32(r.attempt);
+    w.f64(r.time_unix);
+    return w.take();
+}
+
+DispatchRecord decode_dispatch(std::span<const std::uint8_t> b) {
+    ByteReader in(b, "journal dispatch record");
+    DispatchRecord r;
+    r.label = in.str();
+    r.realization = in.i32();
+    r.seed = in.u64();
+    r.rank = in.i32();
+    r.attempt = in.i32();
+    r.time_unix = in.f64();
+    in.expect_end();
+    return r;
+}
+
 Bytes encode(const RunEndRecord& r) {
     ByteWriter w;
     w.str(r.end_time);

@@ -92,6 +92,16 @@ bool State::extend_seeds(int point, int first, std::span<const std::uint64_t> se
 }
 
 bool State::apply(RunStartRecord&& r) {
+    // The previous run died (no end record): what it was running died with it.
+    if (!runs.empty() && !runs.back().end) {
+        for (const auto& [task, worker] : in_flight) {
+            TaskEntry& e =
+                tasks[static_cast<std::size_t>(task.first)][static_cast<std::size_t>(task.second)];
+            if (e.deaths < 255) ++e.deaths;
+        }
+        runs.back().died_running = static_cast<int>(in_flight.size());
+    }
+    in_flight.clear();
     bool changed = false;
     if (plan.points.empty() && runs.empty()) plan.seed = r.plan.seed;
     plan.name = r.plan.name;
@@ -112,7 +122,7 @@ bool State::apply(RunStartRecord&& r) {
         }
         if (extend_seeds(i, 0, p.seeds)) changed = true;
     }
-    runs.push_back(RunSummary{std::move(r.run), std::nullopt, 0, {}});
+    runs.push_back(RunSummary{std::move(r.run), std::nullopt, 0, 0, {}});
     return changed;
 }
 
@@ -147,6 +157,7 @@ std::int64_t State::apply(const ResultRecord& r, const engine::RealizationResult
     e.state = result.status == engine::Status::failed ? TaskState::failed : TaskState::done;
     if (e.state == TaskState::failed) messages[{p, r.realization}].result = result.message;
     e.row = rows++;
+    in_flight.erase({p, r.realization});
     if (!runs.empty()) {
         ++runs.back().stored;
         double& last = runs.back().last_result_unix[r.rank];
@@ -167,6 +178,7 @@ int State::apply(const ErrorRecord& r) {
         t.resize(static_cast<std::size_t>(r.realization) + 1);
     TaskEntry& e = t[static_cast<std::size_t>(r.realization)];
     ++e.errors;
+    in_flight.erase({p, r.realization});
     messages[{p, r.realization}].last_error = r.reason;
     if (!e.result) e.state = TaskState::error;
     failures.push_back(Failure{r.label, r.realization, r.seed, r.rank, r.attempt, true, r.reason});
@@ -175,6 +187,20 @@ int State::apply(const ErrorRecord& r) {
 
 void State::apply(const RunEndRecord& r) {
     if (!runs.empty()) runs.back().end = r;
+    in_flight.clear();  // an ending run stopped its realizations itself: none died
+}
+
+void State::apply(const DispatchRecord& r) {
+    const int p = find_point(r.label);
+    if (p < 0)
+        throw core::StoreError("journal hands out a realization of point '" + r.label +
+                               "', which no run planned (damaged journal)");
+    auto& t = tasks[static_cast<std::size_t>(p)];
+    if (r.realization < 0 || static_cast<std::size_t>(r.realization) >= t.size())
+        throw core::StoreError("journal hands out realization " + std::to_string(r.realization) +
+                               " of point '" + r.label + "', which has " +
+                               std::to_string(t.size()) + " (damaged journal)");
+    in_flight[{p, r.realization}] = r.rank;
 }
 
 const State::Messages& State::message_of(int point, int realization) const {
@@ -189,6 +215,9 @@ StoreStatus State::status() const {
     s.campaign_name = plan.name;
     s.physics_hash = s.has_plan ? plan.physics_hash() : 0;
     s.runs = runs;
+    // The last run without an end record: what it runs now, or what ran when it was killed.
+    if (!s.runs.empty() && !s.runs.back().end)
+        s.runs.back().died_running = static_cast<int>(in_flight.size());
     for (std::size_t p = 0; p < plan.points.size(); ++p) {
         PointStatus ps;
         ps.label = plan.points[p].label;
@@ -229,6 +258,7 @@ StoreStatus State::status() const {
                 case TaskState::error:
                     ++ps.failed;
                     ++ps.errors;
+                    if (e.deaths > 0) ++s.died;
                     s.failures.push_back(Failure{
                         ps.label, static_cast<int>(r),
                         seed_of(static_cast<int>(p), static_cast<int>(r)), 0, e.errors, true,
@@ -279,6 +309,9 @@ void apply_record(State& state, RecordType type, std::uint64_t offset,
         }
         case RecordType::sync:
             state.last_sync = decode_sync(payload);
+            break;
+        case RecordType::dispatch:
+            state.apply(decode_dispatch(payload));
             break;
         case RecordType::allotment: {
             const AllotmentRecord r = decode_allotment(payload);

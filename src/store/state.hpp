@@ -37,6 +37,10 @@ struct State {
     std::optional<RecordType> last_type;
     std::uint64_t last_offset = 0;
     std::optional<SyncRecord> last_sync;
+    // The realizations handed out by the latest run and not answered yet (DispatchRecord;
+    // value: the worker): when the next run starts and that run has no end record, each of
+    // them gets a death (TaskEntry::deaths).
+    std::map<std::pair<int, int>, int> in_flight;
 
     // Each returns what changed, for the HDF5 writer.
     // True when the union plan changed (new points or realizations).
@@ -49,6 +53,7 @@ struct State {
     // The point index (throws for an unknown point).
     int apply(const ErrorRecord& r);
     void apply(const RunEndRecord& r);
+    void apply(const DispatchRecord& r);
 
     // Whether the HDF5 file was closed in step with the journal, judged from the journal alone:
     // the last record is a sync record written right after the file was closed at that length.
@@ -93,10 +98,12 @@ void apply_record(State& state, RecordType type, std::uint64_t offset,
 
 // The HDF5 file `target` written from the journal's records before `limit` (truncates it), then
 // closed as in step with `token` and `journal_bytes` (the rebuild, the snapshot and the merge).
+// The state the replay builds is left in `into` when given (it must be empty): the store's
+// rebuild keeps it as its own instead of holding two (at 10^6 tasks each is 150 MB: issue 44).
 void write_from_journal(const std::filesystem::path& jpath, std::uint64_t limit,
                         const std::filesystem::path& target, const std::string& journal_name,
                         std::uint64_t token, std::uint64_t journal_bytes,
-                        const PointParameters& parameters);
+                        const PointParameters& parameters, State* into = nullptr);
 // A random nonzero token naming an HDF5 file closed in step (its sync record holds it).
 std::uint64_t random_token();
 

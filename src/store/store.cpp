@@ -77,9 +77,11 @@ struct RebuildSink : ReplaySink {
 
 void write_from_journal(const fs::path& jpath, std::uint64_t limit, const fs::path& target,
                         const std::string& journal_name, std::uint64_t token,
-                        std::uint64_t journal_bytes, const PointParameters& parameters) {
+                        std::uint64_t journal_bytes, const PointParameters& parameters,
+                        State* into) {
     layout::Writer w = layout::Writer::create(target, journal_name, parameters);
-    State fresh;
+    State own;
+    State& fresh = into ? *into : own;
     RebuildSink sink(w);
     scan_journal(jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
         if (off < limit) apply_record(fresh, t, off, p, &sink);
@@ -134,9 +136,14 @@ struct Store::Impl {
         tmp += ".rebuild";
         std::error_code ec;
         fs::remove(tmp, ec);
-        // Consistent, but not a sync point (token 0).
+        // Consistent, but not a sync point (token 0). The replay builds the state again from
+        // the journal, which holds everything the state does: it replaces the state instead of
+        // being a second copy (the plan and tasks of 10^6 realizations twice was the master's
+        // peak of memory: issue 44). A failure leaves it half built, and ends the run: the
+        // store is then unusable until it is opened again (update_view's message says so).
+        state = State{};
         write_from_journal(jpath, journal->size(), tmp, jpath.filename().string(), 0, 0,
-                           opt.point_parameters);
+                           opt.point_parameters, &state);
         fsync_path(tmp);
         crash_point("rebuild");
         fs::rename(tmp, path);
@@ -435,6 +442,14 @@ void Store::append(const ErrorRecord& r) {
         m.writer->error(m.state, p, r);
         m.maybe_flush();
     });
+}
+
+void Store::dispatched(const DispatchRecord& r) {
+    Impl& m = *impl_;
+    if (!m.run_open) throw core::StoreError("internal: dispatched() outside a run");
+    m.state.apply(r);  // first: an unplanned task is refused before it is journaled
+    m.journal->append_unsynced(RecordType::dispatch, encode(r));
+    m.state.last_type = RecordType::dispatch;
 }
 
 void Store::end_run(const RunEndRecord& r) {

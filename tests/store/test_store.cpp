@@ -71,6 +71,69 @@ fs::path finished_store(const fs::path& dir) {
     return p;
 }
 
+// Issue 44: a run that dies (no end record) counts a death for each realization it was
+// running (handed out, no result or error yet): killed with it, maybe the cause. A run that
+// ends cleanly counts none, and an answer clears the realization.
+TEST(Store, ARunThatDiesCountsADeathForWhatItWasRunning) {
+    const fs::path p = scratch() / "s.h5";
+    const auto hand_out = [](Store& s, const PointPlan& pt, int r, int rank) {
+        s.dispatched(
+            DispatchRecord{pt.label, r, pt.seeds[static_cast<std::size_t>(r)], rank, 1, 1.7e9});
+    };
+    {
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        hand_out(s, A, 0, 1);
+        hand_out(s, A, 1, 2);
+        hand_out(s, B, 0, 3);
+        s.append(result_record(A, 0, fabricated(0)));
+        s.append(ErrorRecord{B.label, 0, B.seeds[0], 3, 1, 1.7e9, "std::bad_alloc"});
+        // destroyed without end_run: the job was killed while A#1 ran
+    }
+    {
+        const StoreStatus st = read_status(p);
+        ASSERT_EQ(st.runs.size(), 1u);
+        EXPECT_FALSE(st.runs[0].end.has_value());
+        EXPECT_EQ(st.runs[0].died_running, 1);  // A#1
+    }
+    for (int run = 0; run < 2; ++run) {  // A#1 dies again twice, A#2 once (the second time)
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        hand_out(s, A, 1, 1);
+        if (run == 1) hand_out(s, A, 2, 2);
+    }
+    {
+        Store s(p);
+        s.begin_run(run_record({A, B}));
+        ASSERT_NE(s.task(A.label, 1), nullptr);
+        EXPECT_EQ(s.task(A.label, 0)->deaths, 0);  // answered before the death
+        EXPECT_EQ(s.task(A.label, 1)->deaths, 3);
+        EXPECT_EQ(s.task(A.label, 2)->deaths, 1);
+        EXPECT_EQ(s.task(B.label, 0)->deaths, 0);  // its exception answered it
+        EXPECT_EQ(s.task(B.label, 0)->state, TaskState::error);
+        // A run that ends cleanly with a realization handed out (stopped: its state saved or
+        // thrown away) counts no death.
+        hand_out(s, B, 1, 1);
+        s.end_run(RunEndRecord{utc_now(), "interrupted by SIGTERM", 0, 1.0, 0.01});
+    }
+    Store s(p);
+    s.begin_run(run_record({A, B}));
+    EXPECT_EQ(s.task(B.label, 1)->deaths, 0);
+    EXPECT_EQ(s.task(A.label, 1)->deaths, 3);  // kept across runs (journal replay)
+    const StoreStatus st = s.status();
+    ASSERT_EQ(st.runs.size(), 5u);
+    EXPECT_EQ(st.runs[1].died_running, 1);
+    EXPECT_EQ(st.runs[2].died_running, 2);
+    EXPECT_EQ(st.runs[3].died_running, 0);  // ended
+    // A realization handed out that no run planned is refused before it is journaled.
+    const std::string msg = message_of([&] {
+        s.dispatched(DispatchRecord{"D_cm=9", 0, 1, 1, 1, 1.7e9});
+    });
+    EXPECT_TRUE(contains(msg, "which no run planned")) << msg;
+    s.end_run(RunEndRecord{utc_now(), "complete", 0, 1.0, 0.01});
+    EXPECT_EQ(read_status(p).runs[4].died_running, 0);
+}
+
 // Opens the store, expects its first note to contain `note`, and runs an empty run (which
 // rebuilds the HDF5 file when it is not in step); the realizations read back afterwards.
 std::vector<std::pair<std::string, Bytes>> reopen_expecting(const fs::path& p,

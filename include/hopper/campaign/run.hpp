@@ -39,6 +39,9 @@ struct RunOptions {
     // also saved every checkpoint_interval seconds of wall time (0: only when stopped).
     bool checkpoints = true;
     double checkpoint_interval = 600.0;
+    // A realization running each of the last max_deaths times the job died (killed: the OOM
+    // killer, a crash, a lost node) is set aside instead of handed out again; 0: no limit.
+    int max_deaths = 3;
     // --dry-run: list what would run and its estimated core-hours; touch nothing.
     bool dry_run = false;
     // Called on the master only: the deadline (s since 1970) by which the run must end, or

@@ -26,6 +26,7 @@ enum class RecordType : std::uint8_t {
     run_end = 4,    // RunEndRecord
     sync = 5,       // SyncRecord
     allotment = 6,  // AllotmentRecord (issue 29: a target campaign's plan grows by rounds)
+    dispatch = 7,   // DispatchRecord (issue 44: what ran when a run died)
 };
 
 inline constexpr std::size_t journal_header_size = 16;

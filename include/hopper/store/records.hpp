@@ -113,6 +113,19 @@ struct ErrorRecord {
     std::string reason;
 };
 
+// A realization handed to a worker (issue 44): written (not synced) as the master hands it out,
+// so that a run that dies without its run-end record (its processes killed: the kernel's OOM
+// killer, a crash, a lost node) tells which realizations were running when it died. Replay
+// counts, per task, the runs that died while it ran (TaskEntry::deaths).
+struct DispatchRecord {
+    std::string label;
+    int realization = 0;
+    std::uint64_t seed = 0;
+    int rank = 0;
+    int attempt = 1;
+    double time_unix = 0.0;
+};
+
 struct RunEndRecord {
     std::string end_time;  // ISO 8601 UTC
     std::string reason;    // "complete", "interrupted by SIGTERM", ...
@@ -152,12 +165,14 @@ Bytes encode(const ErrorRecord& r);
 Bytes encode(const RunEndRecord& r);
 Bytes encode(const SyncRecord& r);
 Bytes encode(const AllotmentRecord& r);
+Bytes encode(const DispatchRecord& r);
 RunStartRecord decode_run_start(std::span<const std::uint8_t> b);
 ResultRecord decode_result_record(std::span<const std::uint8_t> b);
 ErrorRecord decode_error(std::span<const std::uint8_t> b);
 RunEndRecord decode_run_end(std::span<const std::uint8_t> b);
 SyncRecord decode_sync(std::span<const std::uint8_t> b);
 AllotmentRecord decode_allotment(std::span<const std::uint8_t> b);
+DispatchRecord decode_dispatch(std::span<const std::uint8_t> b);
 
 // The current time as ISO 8601 UTC ("2024-05-01T12:00:00Z") and as seconds since 1970.
 std::string utc_now();

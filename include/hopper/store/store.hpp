@@ -61,6 +61,11 @@ struct TaskEntry {
     std::optional<ResultSummary> result;
     int errors = 0;  // attempts that ended in an exception
     TaskState state = TaskState::pending;
+    // Runs that died (no run-end record: their processes were killed) while this realization
+    // was running on a worker (DispatchRecord), saturating at 255. A realization that kills its
+    // worker (the kernel's OOM killer under a memory limit) dies with every run that hands it
+    // out; `campaign run --max-deaths` sets such a one aside (issue 44).
+    std::uint8_t deaths = 0;
 };
 
 struct PointStatus {
@@ -88,6 +93,9 @@ struct RunSummary {
     RunInfo info;
     std::optional<RunEndRecord> end;  // absent: still running, or killed
     int stored = 0;                   // results recorded by this run
+    // A run without a run-end record: the realizations it was running when it died (from the
+    // dispatch records; for the last run, what it runs now if it still runs).
+    int died_running = 0;
     // Each worker's (rank's) latest result in this run, s since 1970 (finished_unix).
     std::map<int, double> last_result_unix;
 };
@@ -108,6 +116,7 @@ struct StoreStatus {
     std::string campaign_name;
     std::uint64_t physics_hash = 0;
     int total = 0, done = 0, failed = 0, errors = 0, pending = 0;
+    int died = 0;  // of the tasks in error, those that were running when a run died
     std::vector<PointStatus> points;
     std::vector<RunSummary> runs;
     std::vector<Failure> failures;  // one per failed task (its latest failure)
@@ -235,6 +244,9 @@ class Store {
     // Inside a batch: written to the journal at once, durable when commit() returns.
     void append(const ResultRecord& r);
     void append(const ErrorRecord& r);
+    // A realization handed to a worker: journaled without a sync (the page cache outlives a
+    // killed process; a lost node may lose it, and with it only the count of one death).
+    void dispatched(const DispatchRecord& r);
     // Group commit (issue 44): the results and errors appended between begin_batch() and
     // commit() are written to the journal one by one as they come but synced together, by one
     // fdatasync in commit(), which only then brings them into the HDF5 view (the view never
