@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string_view>
 #include <vector>
@@ -333,6 +334,126 @@ TEST(ResultCodec, InconsistentAvalanchesAndArchesAreCleanErrors) {
     bad = r;
     bad.avalanche_sizes[0] = -1;
     EXPECT_NE(decode_error_of(encode_result(bad)).find("negative size"), std::string::npos);
+}
+
+// Every journal record type, fabricated with every member set, keeps the bytes it was written
+// with (frozen: the FNV-1a 64 of each encoding, taken when the records were first described
+// once, issue 42), decodes back to what was encoded, and reads the shapes older writers left
+// (a run end before issue 15, a sync record before checksums, a plan before its settings and
+// its limits).
+struct RecordSamples {
+    RunStartRecord start;
+    ResultRecord result;
+    ErrorRecord error{"D_cm=3 theta_deg=60", 2, 77, 3, 2, 1.7e9 + 0.25, "std::bad_alloc \xc3\xa9"};
+    DispatchRecord dispatch{"D_cm=3 theta_deg=60", 4, 99, 2, 1, 1.7e9 + 0.5};
+    RunEndRecord end{"2026-11-29T19:00:00Z", "interrupted by SIGTERM", 12, 34.5, 0.75, 3.25, 8.5};
+    SyncRecord sync{0x1234567890abcdefull, 4096, 12, FileChecksum{1 << 20, 0xdeadbeefu}};
+    AllotmentRecord allot{{{"D_cm=3 theta_deg=60", 4, {5, 6, 7}}, {"D_cm=4 theta_deg=60", 0, {8}}}};
+    RecordSamples() {
+        start = testing::run_record({testing::point("D_cm=3 theta_deg=60", 3),
+                                     testing::point("D_cm=4 theta_deg=60 material.mu=0.5", 2)},
+                                    11);
+        start.run.start_time = "2026-11-29T18:00:00Z";
+        start.run.hosts = {"node1", "node2", "node2"};
+        start.run.mpi_size = 3;
+        start.run.workers = 2;
+        start.run.pid = 4242;
+        start.plan.points[0].settings = {{"D_cm", 3.0}, {"theta_deg", 60.0}};
+        start.plan.points[0].parameters = {{"material.mu", 0.5}, {"integrator.scheme", "gear4"}};
+        start.plan.points[1].limit = 9;
+        result = testing::result_record(start.plan.points[0], 1, testing::fabricated(2), 2);
+    }
+};
+
+TEST(Records, EveryTypeKeepsItsBytesAndDecodesBack) {
+    const RecordSamples s;
+    const auto frozen = [](const Bytes& b) {
+        return hex64(fnv1a64(std::string(b.begin(), b.end()))) + " " + std::to_string(b.size());
+    };
+    EXPECT_EQ(frozen(encode(s.start)), "a8304f8599551d33 554");
+    EXPECT_EQ(frozen(encode(s.result)), "62ad7ad6f3b36f35 575");
+    EXPECT_EQ(frozen(encode(s.error)), "8f12ffdc35f6f76a 72");
+    EXPECT_EQ(frozen(encode(s.dispatch)), "1ca588249650e0a7 51");
+    EXPECT_EQ(frozen(encode(s.end)), "abc467f14c44590b 86");
+    EXPECT_EQ(frozen(encode(s.sync)), "7c25376c061cd5a0 36");
+    EXPECT_EQ(frozen(encode(s.allot)), "e02f70b563e6c230 98");
+    // Decoded and encoded again: the same bytes (every member came back).
+    EXPECT_EQ(encode(decode_run_start(encode(s.start))), encode(s.start));
+    EXPECT_EQ(encode(decode_result_record(encode(s.result))), encode(s.result));
+    EXPECT_EQ(encode(decode_error(encode(s.error))), encode(s.error));
+    EXPECT_EQ(encode(decode_dispatch(encode(s.dispatch))), encode(s.dispatch));
+    EXPECT_EQ(encode(decode_run_end(encode(s.end))), encode(s.end));
+    EXPECT_EQ(encode(decode_sync(encode(s.sync))), encode(s.sync));
+    EXPECT_EQ(encode(decode_allotment(encode(s.allot))), encode(s.allot));
+    const RunStartRecord back = decode_run_start(encode(s.start));
+    ASSERT_EQ(back.plan.points.size(), 2u);
+    EXPECT_EQ(back.plan.points[0].parameters, s.start.plan.points[0].parameters);
+    EXPECT_EQ(back.plan.points[1].limit, 9);
+    EXPECT_EQ(back.run.hosts, s.start.run.hosts);
+    EXPECT_EQ(decode_sync(encode(s.sync)).file, s.sync.file);
+    EXPECT_EQ(decode_allotment(encode(s.allot)).points[1].seeds, std::vector<std::uint64_t>{8});
+}
+
+TEST(Records, OlderShapesStillDecode) {
+    const RecordSamples s;
+    // A run end before issue 15: no worker seconds.
+    Bytes end = encode(s.end);
+    end.resize(end.size() - 16);
+    const RunEndRecord e = decode_run_end(end);
+    EXPECT_EQ(e.reason, s.end.reason);
+    EXPECT_EQ(e.master_cpu_seconds, 0.75);
+    EXPECT_EQ(e.lost_worker_seconds, 0.0);
+    EXPECT_EQ(e.saved_worker_seconds, 0.0);
+    // A sync record before checksums.
+    SyncRecord bare = s.sync;
+    bare.file.reset();
+    EXPECT_EQ(encode(bare).size(), 24u);
+    EXPECT_FALSE(decode_sync(encode(bare)).file.has_value());
+    // A plan before its limits (issue 29: every seed listed, the limit is their count), and
+    // before its typed settings.
+    RunStartRecord old = s.start;
+    for (auto& pt : old.plan.points)
+        pt.limit = 0;
+    Bytes start = encode(old);
+    start.resize(start.size() - 4 - 4 * old.plan.points.size());  // the format and the limits
+    const RunStartRecord no_limits = decode_run_start(start);
+    EXPECT_EQ(no_limits.plan.points[1].limit, 2);
+    EXPECT_EQ(no_limits.plan.points[0].parameters, s.start.plan.points[0].parameters);
+    for (auto& pt : old.plan.points)
+        pt.settings.clear(), pt.parameters.clear();
+    Bytes bare_plan = encode(old);
+    bare_plan.resize(bare_plan.size() - 4 - 4 * old.plan.points.size() - 8 * 2);
+    const RunStartRecord no_settings = decode_run_start(bare_plan);
+    EXPECT_TRUE(no_settings.plan.points[0].parameters.empty());
+    EXPECT_EQ(no_settings.plan.points[0].seeds, s.start.plan.points[0].seeds);
+    // Damage is named: an impossible count, a negative first realization, a plan format from
+    // a newer writer, bytes left over.
+    const auto refusal = [](const std::function<void()>& f) -> std::string {
+        try {
+            f();
+        } catch (const core::StoreError& e) {
+            return e.what();
+        }
+        return "(decoded)";
+    };
+    Bytes allot = encode(s.allot);
+    allot[0] = 0xff;
+    EXPECT_NE(refusal([&] { decode_allotment(allot); }).find("a point count of"),
+              std::string::npos);
+    AllotmentRecord negative = s.allot;
+    negative.points[0].first = -1;
+    EXPECT_NE(refusal([&] {
+                  decode_allotment(encode(negative));
+              }).find("a negative first realization -1"),
+              std::string::npos);
+    Bytes newer = encode(s.start);
+    newer[newer.size() - 4 - 4 * 2] = 3;  // the plan format after the settings
+    EXPECT_NE(refusal([&] { decode_run_start(newer); }).find("plan format 3 is unknown"),
+              std::string::npos);
+    Bytes longer = encode(s.error);
+    longer.push_back(0);
+    EXPECT_NE(refusal([&] { decode_error(longer); }).find("journal error record: 1 unexpected"),
+              std::string::npos);
 }
 
 TEST(ResultCodec, PhysicsDigestIgnoresOnlyWallClock) {
