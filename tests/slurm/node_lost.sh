@@ -15,36 +15,6 @@ LOG=$STORE.slurm.log
 
 "$EXE" run "$TINY" --store "$WORK/ref.h5" --progress-interval 0 >ref.out 2>ref.err &
 REF=$!
-# rank_of PID: the process's MPI rank (Open MPI's variable under mpirun, PMIx's under srun).
-rank_of() {
-    tr '\0' '\n' <"/proc/$1/environ" 2>/dev/null |
-        sed -n 's/^OMPI_COMM_WORLD_RANK=//p; s/^PMIX_RANK=//p' | head -n 1
-}
-# kill_ranks JOB RANK...: SIGKILL to the campaign processes of those ranks of the job, at once.
-kill_ranks() {
-    local job=$1 p r victims=""
-    shift
-    for p in $(scontrol listpids "$job" 2>/dev/null | awk 'NR > 1 { print $1 }'); do
-        [ "$(cat /proc/"$p"/comm 2>/dev/null)" = campaign ] || continue
-        r=$(rank_of "$p")
-        for want in "$@"; do [ "$r" = "$want" ] && victims="$victims $p"; done
-    done
-    [ "$(echo $victims | wc -w)" -eq $# ] ||
-        fail "job $job: ranks $* are processes '$victims' (expected one each)"
-    kill -KILL $victims
-    echo "killed ranks $* of job $job (pids$victims)" >&2
-}
-# next_job ALLOCATION: waits for that allocation's start line; prints its job id.
-next_job() {
-    local id t_end=$((SECONDS + 180))
-    until id=$(job_of "$LOG" "$1") && [ -n "$id" ]; do
-        [ "$SECONDS" -lt "$t_end" ] &&
-            ! grep -qE "allocation $(($1 - 1)): (not resubmitting|resubmission failed)" "$LOG" ||
-            { cat "$LOG" >&2; fail "allocation $1 never started: the chain ended"; }
-        sleep 0.1
-    done
-    echo "$id"
-}
 # A long limit (10 minutes): only the test's kills interrupt the allocations. Two tasks with the
 # master's rank beside them (--master-slot shared, the default; the local cluster has 2 CPUs):
 # rank 0 the master, ranks 1 and 2 the workers.
