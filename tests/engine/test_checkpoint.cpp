@@ -7,7 +7,10 @@
 
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <vector>
@@ -164,6 +167,41 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"gear4_steady_corrected", Scheme::gear4, false, 1, true},
                       Case{"verlet_steady_corrected", Scheme::verlet, false, 2, true}),
     [](const ::testing::TestParamInfo<Case>& i) { return std::string(i.param.name); });
+
+// The checkpoint format is a promise to the files users have: a state written by an earlier
+// build (tests/engine/data/state-v2-gear4-fields.bin: format 2, written before the state was
+// described once, issue 42; the jamming scene with fields, gear4, seed 2, stopped inside its
+// first shake) still resumes here, to the uninterrupted realization bit for bit.
+// HOPPER_WRITE_STATE_FIXTURE=PATH writes such a state (to make a fixture of a new format).
+TEST(CheckpointFormat, AStateWrittenByAnEarlierBuildStillResumesBitIdentical) {
+    const SceneParams p = jamming(Scheme::gear4, true);
+    const RealizationResult ref = run_realization(p, 2);
+    ASSERT_GE(ref.n_jams, 1);
+    if (const char* out = std::getenv("HOPPER_WRITE_STATE_FIXTURE")) {
+        std::int64_t in_shake = -1;
+        for (const Event& e : ref.events)
+            if (e.kind == Event::Kind::shake_start) {
+                in_shake = std::llround(e.sim_time / ref.diagnostics.dt) + 7;
+                break;
+            }
+        Phase phase{};
+        const auto state = run_until(p, 2, nullptr, in_shake, &phase);
+        std::ofstream(out, std::ios::binary)
+            .write(reinterpret_cast<const char*>(state.data()), std::streamsize(state.size()));
+        std::printf("wrote %zu bytes at step %lld (%s)\n", state.size(), (long long)in_shake,
+                    std::string(to_string(phase)).c_str());
+    }
+    const std::string path =
+        std::string(HOPPER_SOURCE_DIR) + "/tests/engine/data/state-v2-gear4-fields.bin";
+    std::ifstream in(path, std::ios::binary);
+    ASSERT_TRUE(in) << path;
+    const std::vector<std::uint8_t> state((std::istreambuf_iterator<char>(in)),
+                                          std::istreambuf_iterator<char>());
+    ASSERT_GT(state.size(), 1000u);
+    const RealizationResult resumed = resume_realization(p, 2, state);
+    EXPECT_EQ(bytes_of(resumed), bytes_of(ref));
+    EXPECT_EQ(resumed.n_jams, ref.n_jams);
+}
 
 TEST(CheckpointRefusal, AnotherRealizationFormatOrDamageIsRefusedWithTheReason) {
     const SceneParams p = jamming(Scheme::gear4, false);
