@@ -15,122 +15,78 @@ void StateReader::fail() {
         "the checkpoint is truncated or damaged (its state ends early or holds impossible sizes)");
 }
 
-namespace {
-
-void put_vec2(StateWriter& w, const Vec2& v) {
-    w.put(v.x());
-    w.put(v.y());
-}
-
-Vec2 get_vec2(StateReader& r) {
-    const double x = r.get<double>();
-    const double y = r.get<double>();
-    return {x, y};
-}
-
-}  // namespace
-
-void CheckpointAccess::save(const System& s, StateWriter& w) {
-    w.put(s.time_);
-    w.put<std::uint8_t>(s.ready_);
-    w.put<std::uint8_t>(s.need_rebuild_);
-    w.put<std::uint8_t>(s.walls_changed_);
-    w.put<std::uint8_t>(s.history_saved_);
-    w.put<std::uint8_t>(s.history_);
-    w.put(s.next_id_);
-    for (const auto* c :
-         {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,   &s.fy_,   &s.tq_,
-          &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,   &s.x4_,   &s.y2_,
-          &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_, &s.yref_, &s.wx_,
-          &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
-        w.put_vector(*c);
-    for (const auto* c : {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_,
-                          &s.cell_of_, &s.order_, &s.wcell_start_, &s.wcell_items_})
-        w.put_vector(*c);
-    put_vec2(w, s.wall_offset_ref_);
-    put_vec2(w, s.wall_offset_);
-    put_vec2(w, s.wall_velocity_);
-    w.put(s.cell_size_);
-    w.put(s.grid_x0_);
-    w.put(s.grid_y0_);
-    w.put(s.grid_nx_);
-    w.put(s.grid_ny_);
-    w.put(s.wcell_size_);
-    w.put(s.wgrid_x0_);
-    w.put(s.wgrid_y0_);
-    w.put(s.wgrid_nx_);
-    w.put(s.wgrid_ny_);
-    w.put(s.r_max_);
-    w.put(s.wr_max_);
-    w.put(s.removal_floor_);
-    w.put<std::uint64_t>(s.removals_.size());
-    for (const Removal& q : s.removals_) {
-        w.put(q.id);
-        w.put(q.time);
-    }
-    put_vec2(w, s.wall_force_);
-    w.put(s.max_overlap_seen_);
-    w.put(s.contacts_);
-    w.put(s.rebuilds_);
-    // The timings last: test_kernel_paths compares the bytes before them across force paths.
-    w.put(s.phase_.forces);
-    w.put(s.phase_.integration);
-    w.put(s.phase_.neighbors);
-}
-
-void CheckpointAccess::restore(System& s, StateReader& r) {
-    s.time_ = r.get<double>();
-    s.ready_ = r.get<std::uint8_t>() != 0;
-    s.ahead_ = false;  // the fused step's look-ahead is not state: recomputed by a step
-    s.need_rebuild_ = r.get<std::uint8_t>() != 0;
-    s.walls_changed_ = r.get<std::uint8_t>() != 0;
-    s.history_saved_ = r.get<std::uint8_t>() != 0;
-    const bool history = r.get<std::uint8_t>() != 0;
-    if (history != s.history_)
-        throw core::ConfigError(
-            "the checkpoint was written with another contact law (tangential springs " +
-            std::string(history ? "on" : "off") + ", this realization has them " +
-            (s.history_ ? "on" : "off") + ")");
-    s.next_id_ = r.get<int>();
+// The System's state, described once: every column, the neighbour list with its springs, the
+// grids, the wall motion, the removals and the counters.
+template <class Io, class S>
+void CheckpointAccess::system(Io& io, S& s) {
+    const auto vec2 = [&](auto& v) {
+        io(v.x());
+        io(v.y());
+    };
+    io(s.time_);
+    io(s.ready_);
+    io(s.need_rebuild_);
+    io(s.walls_changed_);
+    io(s.history_saved_);
+    io.template as<std::uint8_t>(
+        s.history_, [](bool h) { return h; },
+        [&](std::uint8_t h) {
+            if (bool(h) != s.history_)
+                throw core::ConfigError(
+                    "the checkpoint was written with another contact law (tangential springs " +
+                    std::string(h ? "on" : "off") + ", this realization has them " +
+                    (s.history_ ? "on" : "off") + ")");
+            return s.history_;
+        });
+    io(s.next_id_);
     for (auto* c : {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,   &s.fy_,   &s.tq_,
                     &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,   &s.x4_,   &s.y2_,
                     &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_, &s.yref_, &s.wx_,
                     &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
-        r.get_vector(*c);
+        io(*c);
     for (auto* c : {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_,
                     &s.cell_of_, &s.order_, &s.wcell_start_, &s.wcell_items_})
-        r.get_vector(*c);
-    s.wall_offset_ref_ = get_vec2(r);
-    s.wall_offset_ = get_vec2(r);
-    s.wall_velocity_ = get_vec2(r);
-    s.cell_size_ = r.get<double>();
-    s.grid_x0_ = r.get<double>();
-    s.grid_y0_ = r.get<double>();
-    s.grid_nx_ = r.get<int>();
-    s.grid_ny_ = r.get<int>();
-    s.wcell_size_ = r.get<double>();
-    s.wgrid_x0_ = r.get<double>();
-    s.wgrid_y0_ = r.get<double>();
-    s.wgrid_nx_ = r.get<int>();
-    s.wgrid_ny_ = r.get<int>();
-    s.r_max_ = r.get<double>();
-    s.wr_max_ = r.get<double>();
-    s.removal_floor_ = r.get<double>();
-    const auto n_removals = r.get<std::uint64_t>();
-    if (n_removals > s.x_.size() + (std::uint64_t(1) << 24)) StateReader::fail();
-    s.removals_.clear();
-    for (std::uint64_t k = 0; k < n_removals; ++k) {
-        const int id = r.get<int>();
-        const double t = r.get<double>();
-        s.removals_.push_back({id, t});
-    }
-    s.wall_force_ = get_vec2(r);
-    s.max_overlap_seen_ = r.get<double>();
-    s.contacts_ = r.get<int>();
-    s.rebuilds_ = r.get<std::int64_t>();
-    s.phase_.forces = r.get<double>();
-    s.phase_.integration = r.get<double>();
-    s.phase_.neighbors = r.get<double>();
+        io(*c);
+    vec2(s.wall_offset_ref_);
+    vec2(s.wall_offset_);
+    vec2(s.wall_velocity_);
+    io(s.cell_size_);
+    io(s.grid_x0_);
+    io(s.grid_y0_);
+    io(s.grid_nx_);
+    io(s.grid_ny_);
+    io(s.wcell_size_);
+    io(s.wgrid_x0_);
+    io(s.wgrid_y0_);
+    io(s.wgrid_nx_);
+    io(s.wgrid_ny_);
+    io(s.r_max_);
+    io(s.wr_max_);
+    io(s.removal_floor_);
+    io.list(s.removals_, 12, [&](auto& q) {
+        io(q.id);
+        io(q.time);
+    });
+    io.check([&] { return s.removals_.size() <= s.x_.size() + (std::size_t(1) << 24); });
+    vec2(s.wall_force_);
+    io(s.max_overlap_seen_);
+    io(s.contacts_);
+    io(s.rebuilds_);
+    // The timings last: test_kernel_paths compares the bytes before them across force paths.
+    io(s.phase_.forces);
+    io(s.phase_.integration);
+    io(s.phase_.neighbors);
+}
+
+void CheckpointAccess::save(const System& s, StateWriter& w) {
+    StatePut io(w);
+    system(io, s);
+}
+
+void CheckpointAccess::restore(System& s, StateReader& r) {
+    StateGet io(r);
+    system(io, s);
+    s.ahead_ = false;  // the fused step's look-ahead is not state: recomputed by a step
     check_invariants(s);
     // Per-pair constants of the list are derived, not saved: the same bits from the same list.
     if (!s.pstart_.empty() && !s.wstart_.empty()) s.pair_constants();
@@ -240,196 +196,149 @@ void CheckpointAccess::check_invariants(const System& s) {
     }
 }
 
-void save_moments(const FieldMoments& m, StateWriter& w) {
-    w.put(m.grid.x0);
-    w.put(m.grid.y0);
-    w.put(m.grid.cell);
-    w.put(m.grid.nx);
-    w.put(m.grid.ny);
-    w.put<std::uint8_t>(m.grid.kernel == FieldKernel::gaussian);
-    w.put(m.grid.kernel_width);
-    w.put_vector(m.windows);
-    w.put_vector(m.weight);
-    for (int f = 0; f < field_count; ++f) {
-        w.put_vector(m.mean[f]);
-        w.put_vector(m.m2[f]);
-    }
-    w.put(m.total_windows);
-    w.put(m.samples);
-    w.put(m.t_first);
-    w.put(m.t_last);
-    w.put_vector(m.outline_x);
-    w.put_vector(m.outline_y);
-    w.put(m.wall_diameter);
-}
+namespace {
 
-void restore_moments(FieldMoments& m, StateReader& r) {
-    m.grid.x0 = r.get<double>();
-    m.grid.y0 = r.get<double>();
-    m.grid.cell = r.get<double>();
-    m.grid.nx = r.get<int>();
-    m.grid.ny = r.get<int>();
-    m.grid.kernel = r.get<std::uint8_t>() ? FieldKernel::gaussian : FieldKernel::cell;
-    m.grid.kernel_width = r.get<double>();
-    r.get_vector(m.windows);
-    r.get_vector(m.weight);
+template <class R, class T>
+concept Is = std::same_as<std::remove_const_t<R>, T>;
+
+// The field moments (a result's, and the accumulator's so far), described once.
+template <class Io, Is<FieldMoments> M>
+void fields(Io& io, M& m) {
+    io(m.grid.x0);
+    io(m.grid.y0);
+    io(m.grid.cell);
+    io(m.grid.nx);
+    io(m.grid.ny);
+    io.template as<std::uint8_t>(
+        m.grid.kernel, [](FieldKernel k) { return k == FieldKernel::gaussian; },
+        [](std::uint8_t b) { return b ? FieldKernel::gaussian : FieldKernel::cell; });
+    io(m.grid.kernel_width);
+    io(m.windows);
+    io(m.weight);
     for (int f = 0; f < field_count; ++f) {
-        r.get_vector(m.mean[f]);
-        r.get_vector(m.m2[f]);
+        io(m.mean[f]);
+        io(m.m2[f]);
     }
-    m.total_windows = r.get<std::int64_t>();
-    m.samples = r.get<std::int64_t>();
-    m.t_first = r.get<double>();
-    m.t_last = r.get<double>();
-    r.get_vector(m.outline_x);
-    r.get_vector(m.outline_y);
-    m.wall_diameter = r.get<double>();
+    io(m.total_windows);
+    io(m.samples);
+    io(m.t_first);
+    io(m.t_last);
+    io(m.outline_x);
+    io(m.outline_y);
+    io(m.wall_diameter);
     // Per-node vectors sized by the grid (merge and the store index them by node).
-    if (m.grid.nx < 0 || m.grid.ny < 0 ||
-        std::int64_t(m.grid.nx) * std::int64_t(m.grid.ny) > (std::int64_t(1) << 31) - 1)
-        StateReader::fail();
-    const auto nodes = std::size_t(m.grid.size());
-    bool sized = m.windows.size() == nodes && m.weight.size() == nodes;
-    for (int f = 0; f < field_count; ++f)
-        sized = sized && m.mean[f].size() == nodes && m.m2[f].size() == nodes;
-    if (!sized) StateReader::fail();
+    io.check([&] {
+        if (m.grid.nx < 0 || m.grid.ny < 0 ||
+            std::int64_t(m.grid.nx) * std::int64_t(m.grid.ny) > (std::int64_t(1) << 31) - 1)
+            return false;
+        const auto nodes = std::size_t(m.grid.size());
+        bool sized = m.windows.size() == nodes && m.weight.size() == nodes;
+        for (int f = 0; f < field_count; ++f)
+            sized = sized && m.mean[f].size() == nodes && m.m2[f].size() == nodes;
+        return sized;
+    });
 }
 
-void CheckpointAccess::save(const FieldAccumulator& a, StateWriter& w) {
-    save_moments(a.out_, w);
-    w.put(a.window_);
-    w.put(a.start_);
-    w.put(a.current_);
-    w.put(a.window_samples_);
-    w.put(a.min_weight_);
-    w.put_vector(a.wsum_);
-    for (int f = 0; f < field_count; ++f)
-        w.put_vector(a.fsum_[f]);
-    w.put_vector(a.touched_);
+// The result so far, described once (its byte order is state format 2's).
+template <class Io, Is<RealizationResult> R>
+void fields(Io& io, R& res) {
+    io.enumeration(res.status, Status::failed);
+    io(res.message);
+    io(res.seed);
+    io(res.particles);
+    io(res.wall_particles);
+    io(res.survival_times);
+    io(res.censored);
+    io(res.jam_onsets);
+    io(res.shakes_per_jam);
+    io(res.n_jams);
+    io(res.n_shakes);
+    io(res.n_jams_multi_shake);
+    io.flagged(res.empty_time);
+    io.flagged(res.discharge_rate);
+    io(res.discharge_rate_mass);
+    io(res.discharged);
+    io(res.exit_times);
+    io(res.curve_time);
+    io(res.curve_count);
+    io.list(res.events, 24, [&](auto& e) {
+        io.enumeration(e.kind, Event::Kind::stop);
+        io(e.time);
+        io(e.sim_time);
+        io(e.in_hopper);
+    });
+    // The diagnostics' plain numbers as one block.
+    using Numbers =
+        std::conditional_t<std::is_const_v<R>, const DiagnosticNumbers, DiagnosticNumbers>;
+    io(static_cast<Numbers&>(res.diagnostics));
+    io.optional(res.fields, [&](auto& m) { fields(io, m); });
+    // Issue 13: avalanche sizes and arches so far.
+    io(res.avalanche_sizes);
+    io.list(res.arches, 32, [&](auto& a) {
+        io(a.ids);
+        io(a.x);
+        io(a.y);
+        io(a.span);
+        io(a.max_angle);
+        io.check([&] { return a.x.size() == a.ids.size() && a.y.size() == a.ids.size(); });
+    });
+    io.check([&] { return res.arches.size() <= res.jam_onsets.size(); });
 }
 
-void CheckpointAccess::restore(FieldAccumulator& a, StateReader& r) {
-    restore_moments(a.out_, r);
-    a.window_ = r.get<double>();
-    a.start_ = r.get<double>();
-    a.current_ = r.get<std::int64_t>();
-    a.window_samples_ = r.get<int>();
-    a.min_weight_ = r.get<double>();
-    r.get_vector(a.wsum_);
-    for (int f = 0; f < field_count; ++f)
-        r.get_vector(a.fsum_[f]);
-    r.get_vector(a.touched_);
-    const auto nodes = std::size_t(a.out_.grid.size());
-    if (a.wsum_.size() != nodes) StateReader::fail();
-    for (int f = 0; f < field_count; ++f)
-        if (a.fsum_[f].size() != nodes) StateReader::fail();
-    for (int k : a.touched_)
-        if (k < 0 || std::size_t(k) >= nodes) StateReader::fail();
-}
+}  // namespace
 
 void save_result(const RealizationResult& res, StateWriter& w) {
-    w.put(static_cast<std::int32_t>(res.status));
-    w.put_string(res.message);
-    w.put(res.seed);
-    w.put(res.particles);
-    w.put(res.wall_particles);
-    w.put_vector(res.survival_times);
-    w.put_vector(res.censored);
-    w.put_vector(res.jam_onsets);
-    w.put_vector(res.shakes_per_jam);
-    w.put(res.n_jams);
-    w.put(res.n_shakes);
-    w.put(res.n_jams_multi_shake);
-    w.put<std::uint8_t>(res.empty_time.has_value());
-    w.put(res.empty_time.value_or(0.0));
-    w.put<std::uint8_t>(res.discharge_rate.has_value());
-    w.put(res.discharge_rate.value_or(0.0));
-    w.put(res.discharge_rate_mass);
-    w.put(res.discharged);
-    w.put_vector(res.exit_times);
-    w.put_vector(res.curve_time);
-    w.put_vector(res.curve_count);
-    w.put<std::uint64_t>(res.events.size());
-    for (const Event& e : res.events) {
-        w.put(static_cast<std::int32_t>(e.kind));
-        w.put(e.time);
-        w.put(e.sim_time);
-        w.put(e.in_hopper);
-    }
-    w.put(static_cast<const DiagnosticNumbers&>(res.diagnostics));  // plain numbers
-    w.put<std::uint8_t>(res.fields.has_value());
-    if (res.fields) save_moments(*res.fields, w);
-    // Issue 13: avalanche sizes and arches so far.
-    w.put_vector(res.avalanche_sizes);
-    w.put<std::uint64_t>(res.arches.size());
-    for (const Arch& a : res.arches) {
-        w.put_vector(a.ids);
-        w.put_vector(a.x);
-        w.put_vector(a.y);
-        w.put(a.span);
-        w.put(a.max_angle);
-    }
+    StatePut io(w);
+    fields(io, res);
 }
 
 void restore_result(RealizationResult& res, StateReader& r) {
-    const auto status = r.get<std::int32_t>();
-    if (status < 0 || status > static_cast<std::int32_t>(Status::failed)) StateReader::fail();
-    res.status = static_cast<Status>(status);
-    res.message = r.get_string();
-    res.seed = r.get<std::uint64_t>();
-    res.particles = r.get<int>();
-    res.wall_particles = r.get<int>();
-    r.get_vector(res.survival_times);
-    r.get_vector(res.censored);
-    r.get_vector(res.jam_onsets);
-    r.get_vector(res.shakes_per_jam);
-    res.n_jams = r.get<int>();
-    res.n_shakes = r.get<int>();
-    res.n_jams_multi_shake = r.get<int>();
-    const bool has_empty = r.get<std::uint8_t>() != 0;
-    const double empty = r.get<double>();
-    res.empty_time = has_empty ? std::optional<double>(empty) : std::nullopt;
-    const bool has_rate = r.get<std::uint8_t>() != 0;
-    const double rate = r.get<double>();
-    res.discharge_rate = has_rate ? std::optional<double>(rate) : std::nullopt;
-    res.discharge_rate_mass = r.get<double>();
-    res.discharged = r.get<int>();
-    r.get_vector(res.exit_times);
-    r.get_vector(res.curve_time);
-    r.get_vector(res.curve_count);
-    const auto n_events = r.get<std::uint64_t>();
-    if (n_events > (std::uint64_t(1) << 32)) StateReader::fail();
-    res.events.clear();
-    for (std::uint64_t k = 0; k < n_events; ++k) {
-        Event e{};
-        const auto kind = r.get<std::int32_t>();
-        if (kind < 0 || kind > static_cast<std::int32_t>(Event::Kind::stop)) StateReader::fail();
-        e.kind = static_cast<Event::Kind>(kind);
-        e.time = r.get<double>();
-        e.sim_time = r.get<double>();
-        e.in_hopper = r.get<int>();
-        res.events.push_back(e);
-    }
-    static_cast<DiagnosticNumbers&>(res.diagnostics) = r.get<DiagnosticNumbers>();
-    if (r.get<std::uint8_t>()) {
-        FieldMoments m;
-        restore_moments(m, r);
-        res.fields = std::move(m);
-    } else {
-        res.fields.reset();
-    }
-    r.get_vector(res.avalanche_sizes);
-    const auto n_arches = r.get<std::uint64_t>();
-    if (n_arches > res.jam_onsets.size()) StateReader::fail();
-    res.arches.assign(n_arches, Arch{});
-    for (Arch& a : res.arches) {
-        r.get_vector(a.ids);
-        r.get_vector(a.x);
-        r.get_vector(a.y);
-        a.span = r.get<double>();
-        a.max_angle = r.get<double>();
-        if (a.x.size() != a.ids.size() || a.y.size() != a.ids.size()) StateReader::fail();
-    }
+    StateGet io(r);
+    fields(io, res);
+}
+
+void save_moments(const FieldMoments& m, StateWriter& w) {
+    StatePut io(w);
+    fields(io, m);
+}
+
+void restore_moments(FieldMoments& m, StateReader& r) {
+    StateGet io(r);
+    fields(io, m);
+}
+
+// The field accumulator's open window, described once.
+template <class Io, class A>
+void CheckpointAccess::accumulator(Io& io, A& a) {
+    fields(io, a.out_);
+    io(a.window_);
+    io(a.start_);
+    io(a.current_);
+    io(a.window_samples_);
+    io(a.min_weight_);
+    io(a.wsum_);
+    for (int f = 0; f < field_count; ++f)
+        io(a.fsum_[f]);
+    io(a.touched_);
+    io.check([&] {
+        const auto nodes = std::size_t(a.out_.grid.size());
+        if (a.wsum_.size() != nodes) return false;
+        for (int f = 0; f < field_count; ++f)
+            if (a.fsum_[f].size() != nodes) return false;
+        for (int k : a.touched_)
+            if (k < 0 || std::size_t(k) >= nodes) return false;
+        return true;
+    });
+}
+
+void CheckpointAccess::save(const FieldAccumulator& a, StateWriter& w) {
+    StatePut io(w);
+    accumulator(io, a);
+}
+
+void CheckpointAccess::restore(FieldAccumulator& a, StateReader& r) {
+    StateGet io(r);
+    accumulator(io, a);
 }
 
 }  // namespace hopper::engine

@@ -228,6 +228,8 @@ struct Realization::Impl {
     }
     void put_fingerprint(StateWriter& w) const;
     void check_fingerprint(StateReader& r) const;
+    template <class Io, class Self>
+    static void protocol_fields(Io& io, Self& s);  // the protocol's state, described once
     std::vector<std::uint8_t> save_state() const;
     void restore_state(std::span<const std::uint8_t> bytes);
     void remember_reinserted();  // realization_state.cpp

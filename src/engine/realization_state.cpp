@@ -71,39 +71,60 @@ void Realization::Impl::remember_reinserted() {
     }
 }
 
+// The protocol's own state, described once (its byte order is state format 2's): the phase and
+// the detector's clocks, the shake, the discharge log's exits, the observers' schedules, the
+// settling clock, the avalanche base, the steady state's insertion height and its generator.
+template <class Io, class Self>
+void Realization::Impl::protocol_fields(Io& io, Self& s) {
+    io.enumeration(s.phase, Phase::shake);
+    io.enumeration(s.det.flow, Flow::ended);
+    io.template as<double>(  // the wall time so far (a resumed run's clock continues from it)
+        s.wall_start,
+        [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); },
+        [](double elapsed) {
+            return Clock::now() - std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(elapsed));
+        });
+    io(s.particle_steps);
+    io(s.td);
+    io(s.det.flow_start);
+    io(s.det.last_occupied);
+    io(s.det.check_start);
+    io(s.shaker.shake_start);
+    io(s.shaker.shakes_this_jam);
+    io.list(s.det.jammed, 16, [&](auto& on_off) {
+        io(on_off.first);
+        io(on_off.second);
+    });
+    io(s.log_.exit_mass);
+    io(s.step_count);
+    io(s.next_snapshot);
+    io(s.next_progress);
+    io(s.below_since);
+    io(s.interval_base);  // issue 13
+    io(s.reinserter.insert_base);
+    using Words = std::array<std::uint64_t, 4>;
+    io.template as<Words>(
+        s.rng,
+        [](const core::Rng& g) {
+            Words w{};
+            g.state(w.data());
+            return w;
+        },
+        [&](const Words& w) {
+            core::Rng g = s.rng;
+            g.set_state(w.data());
+            return g;
+        });
+}
+
 std::vector<std::uint8_t> Realization::Impl::save_state() const {
     StateWriter w;
     w.put_string("HOPPERRS");
     w.put(state_format_version);
     put_fingerprint(w);
-    w.put(static_cast<std::int32_t>(phase));
-    w.put(static_cast<std::int32_t>(det.flow));
-    w.put(std::chrono::duration<double>(Clock::now() - wall_start).count());
-    w.put(particle_steps);
-    w.put(td);
-    w.put(det.flow_start);
-    w.put(det.last_occupied);
-    w.put(det.check_start);
-    w.put(shaker.shake_start);
-    w.put(shaker.shakes_this_jam);
-    w.put<std::uint64_t>(det.jammed.size());
-    for (const auto& [on, off] : det.jammed) {
-        w.put(on);
-        w.put(off);
-    }
-    w.put_vector(log_.exit_mass);
-    w.put(step_count);
-    w.put(next_snapshot);
-    w.put(next_progress);
-    w.put(below_since);
-    // Issue 13: the avalanche count's base, the steady state's insertion height and its
-    // generator (draws positions of re-inserted particles).
-    w.put(interval_base);
-    w.put(reinserter.insert_base);
-    std::uint64_t rs[4];
-    rng.state(rs);
-    for (std::uint64_t v : rs)
-        w.put(v);
+    StatePut io(w);
+    protocol_fields(io, *this);
     save_result(res, w);
     CheckpointAccess::save(*sys, w);
     w.put<std::uint8_t>(fields.active());
@@ -124,40 +145,8 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
                                 "; this engine reads format " +
                                 std::to_string(state_format_version));
     check_fingerprint(r);
-    const auto ph = r.get<std::int32_t>();
-    const auto fl = r.get<std::int32_t>();
-    if (ph < 0 || ph > 2 || fl < 0 || fl > 3) StateReader::fail();
-    phase = static_cast<Phase>(ph);
-    det.flow = static_cast<Flow>(fl);
-    const double elapsed = r.get<double>();
-    wall_start = Clock::now() - std::chrono::duration_cast<Clock::duration>(
-                                    std::chrono::duration<double>(elapsed));
-    particle_steps = r.get<double>();
-    td = r.get<double>();
-    det.flow_start = r.get<double>();
-    det.last_occupied = r.get<double>();
-    det.check_start = r.get<double>();
-    shaker.shake_start = r.get<double>();
-    shaker.shakes_this_jam = r.get<int>();
-    const auto n_jammed = r.get<std::uint64_t>();
-    if (n_jammed > (std::uint64_t(1) << 32)) StateReader::fail();
-    det.jammed.clear();
-    for (std::uint64_t k = 0; k < n_jammed; ++k) {
-        const double on = r.get<double>();
-        const double off = r.get<double>();
-        det.jammed.emplace_back(on, off);
-    }
-    r.get_vector(log_.exit_mass);
-    step_count = r.get<std::int64_t>();
-    next_snapshot = r.get<double>();
-    next_progress = r.get<double>();
-    below_since = r.get<double>();
-    interval_base = r.get<int>();
-    reinserter.insert_base = r.get<double>();
-    std::uint64_t rs[4];
-    for (std::uint64_t& v : rs)
-        v = r.get<std::uint64_t>();
-    rng.set_state(rs);
+    StateGet io(r);
+    protocol_fields(io, *this);
     restore_result(res, r);
     CheckpointAccess::restore(*sys, r);
     remember_reinserted();

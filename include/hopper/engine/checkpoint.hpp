@@ -20,8 +20,10 @@
 // truncated or damaged buffer is refused the same way. The campaign layer adds its own header
 // (code version, physics) and a checksum around these bytes.
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -95,6 +97,7 @@ class StateReader {
         return {reinterpret_cast<const char*>(b.data()), b.size()};
     }
     bool at_end() const { return in_.remaining() == 0; }
+    std::size_t remaining() const { return in_.remaining(); }
     [[noreturn]] static void fail();
 
   private:
@@ -104,6 +107,126 @@ class StateReader {
         return in_.raw(static_cast<std::size_t>(n));
     }
     core::ByteReader in_;
+};
+
+// A state described once (the pattern of core/described.hpp, in the state format): one
+// function names the members in byte order and both writes and reads them, walked by a
+// StatePut (save) or a StateGet (restore). Plain values are their bytes, vectors and strings
+// their 64-bit count first, a bool one byte, an enumeration 32 bits read back within its range;
+// what a reader must check is said once with check() (a StateGet fails, a StatePut passes).
+template <class T>
+inline constexpr bool is_std_vector = false;
+template <class T, class A>
+inline constexpr bool is_std_vector<std::vector<T, A>> = true;
+
+class StatePut {
+  public:
+    explicit StatePut(StateWriter& w) : w_(w) {}
+    template <class T>
+    void operator()(const T& v) {
+        if constexpr (is_std_vector<T>)
+            w_.put_vector(v);
+        else if constexpr (std::is_same_v<T, std::string>)
+            w_.put_string(v);
+        else if constexpr (std::is_same_v<T, bool>)
+            w_.put<std::uint8_t>(v);
+        else
+            w_.put(v);
+    }
+    // An enumeration as 32 bits; the reader takes values up to `last` only.
+    template <class E>
+    void enumeration(const E& v, E /*last*/) {
+        w_.put(static_cast<std::int32_t>(v));
+    }
+    // A member stored as another type: `to` makes the stored value, `from` (the reader's)
+    // makes the member again.
+    template <class Stored, class T, class To, class From>
+    void as(const T& member, To&& to, From&& /*from*/) {
+        (*this)(static_cast<Stored>(to(member)));
+    }
+    // An optional value: a flag, then the value (its type's zero when absent).
+    template <class T>
+    void flagged(const std::optional<T>& o) {
+        (*this)(o.has_value());
+        (*this)(o.value_or(T{}));
+    }
+    // An optional part: a flag, then the part as `each` describes it when present.
+    template <class T, class F>
+    void optional(const std::optional<T>& o, F&& each) {
+        (*this)(o.has_value());
+        if (o) each(*o);
+    }
+    // A list of described elements: its count (64 bits), then each; `min_bytes` (the fewest
+    // bytes an element takes) bounds the count the reader accepts.
+    template <class T, class F>
+    void list(const std::vector<T>& v, std::size_t /*min_bytes*/, F&& each) {
+        w_.put<std::uint64_t>(v.size());
+        for (const T& e : v)
+            each(e);
+    }
+    template <class Ok>
+    void check(Ok&& /*ok*/) {}
+
+  private:
+    StateWriter& w_;
+};
+
+class StateGet {
+  public:
+    explicit StateGet(StateReader& r) : r_(r) {}
+    template <class T>
+    void operator()(T& v) {
+        if constexpr (is_std_vector<T>)
+            r_.get_vector(v);
+        else if constexpr (std::is_same_v<T, std::string>)
+            v = r_.get_string();
+        else if constexpr (std::is_same_v<T, bool>)
+            v = r_.get<std::uint8_t>() != 0;
+        else
+            v = r_.get<T>();
+    }
+    template <class E>
+    void enumeration(E& v, E last) {
+        const auto raw = r_.get<std::int32_t>();
+        if (raw < 0 || raw > static_cast<std::int32_t>(last)) StateReader::fail();
+        v = static_cast<E>(raw);
+    }
+    template <class Stored, class T, class To, class From>
+    void as(T& member, To&& /*to*/, From&& from) {
+        Stored stored{};
+        (*this)(stored);
+        member = from(stored);
+    }
+    template <class T>
+    void flagged(std::optional<T>& o) {
+        bool has = false;
+        T value{};
+        (*this)(has);
+        (*this)(value);
+        o = has ? std::optional<T>(value) : std::nullopt;
+    }
+    template <class T, class F>
+    void optional(std::optional<T>& o, F&& each) {
+        bool has = false;
+        (*this)(has);
+        o.reset();
+        if (has) each(o.emplace());
+    }
+    template <class T, class F>
+    void list(std::vector<T>& v, std::size_t min_bytes, F&& each) {
+        const auto n = r_.get<std::uint64_t>();
+        if (n > r_.remaining() / std::max<std::size_t>(min_bytes, 1)) StateReader::fail();
+        v.assign(static_cast<std::size_t>(n), T{});
+        for (T& e : v)
+            each(e);
+    }
+    template <class Ok>
+    void check(Ok&& ok) {
+        if (!ok()) StateReader::fail();
+    }
+
+  private:
+    StateReader& r_;
 };
 
 class System;
@@ -123,6 +246,13 @@ struct CheckpointAccess {
     static void check_invariants(const System& s);
     static void save(const FieldAccumulator& a, StateWriter& w);
     static void restore(FieldAccumulator& a, StateReader& r);
+
+  private:
+    // Each state described once, walked by StatePut or StateGet (checkpoint.cpp).
+    template <class Io, class S>
+    static void system(Io& io, S& s);
+    template <class Io, class A>
+    static void accumulator(Io& io, A& a);
 };
 
 void save_moments(const FieldMoments& m, StateWriter& w);
