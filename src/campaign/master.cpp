@@ -369,15 +369,14 @@ Master::Master(MasterChannel& channel, store::Store& store, const StopRequests& 
     : channel_(channel), store_(store), stop_(stop), options_(options), log_(log) {}
 
 void add_round(MasterReport& run, const MasterReport& round) {
-    run.stored += round.stored;
-    run.failed += round.failed;
-    run.errors += round.errors;
-    run.gave_up += round.gave_up;
-    run.interrupted += round.interrupted;
-    run.not_started += round.not_started;
-    run.reassigned += round.reassigned;
-    run.late_identical += round.late_identical;
-    run.late_different += round.late_different;
+    using R = MasterReport;
+    // The counts and seconds: summed, every one in this list.
+    const auto sum = [&](auto... member) { ((run.*member += round.*member), ...); };
+    sum(&R::stored, &R::failed, &R::errors, &R::gave_up, &R::interrupted, &R::not_started,
+        &R::reassigned, &R::late_identical, &R::late_different, &R::wall_seconds, &R::cpu_seconds,
+        &R::lost_worker_seconds, &R::saved_worker_seconds, &R::checkpoints_written, &R::resumed,
+        &R::deadline_skipped);
+    // The state at the end: the last round's, where it has one.
     run.silent_at_end = round.silent_at_end;
     if (round.stopped) {
         run.stopped = true;
@@ -385,13 +384,6 @@ void add_round(MasterReport& run, const MasterReport& round) {
     }
     run.stopped_running = run.stopped_running || round.stopped_running;
     if (!round.fail_fast.empty()) run.fail_fast = round.fail_fast;
-    run.wall_seconds += round.wall_seconds;
-    run.cpu_seconds += round.cpu_seconds;
-    run.lost_worker_seconds += round.lost_worker_seconds;
-    run.saved_worker_seconds += round.saved_worker_seconds;
-    run.checkpoints_written += round.checkpoints_written;
-    run.resumed += round.resumed;
-    run.deadline_skipped += round.deadline_skipped;
 }
 
 MasterReport Master::run(const std::vector<TaskRef>& todo, Totals totals) {
