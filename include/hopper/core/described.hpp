@@ -75,6 +75,11 @@ class Put {
     void derived(const T& /*member*/, F&& value) {
         (*this)(static_cast<T>(value()));
     }
+    // An enumeration as one byte; the reader takes values in [first, last] only.
+    template <class E>
+    void enumeration(const E& v, E /*first*/, E /*last*/) {
+        w_.u8(static_cast<std::uint8_t>(v));
+    }
     // A format number (u32) that says what follows.
     void format(std::uint32_t v, const char* /*what*/) { w_.u32(v); }
     template <class Message>
@@ -128,6 +133,13 @@ class Get {
     template <class T, class F>
     void derived(T& member, F&& /*value*/) {
         (*this)(member);
+    }
+    template <class E>
+    void enumeration(E& v, E first, E last) {
+        const std::uint8_t raw = r_.u8();
+        if (raw < static_cast<std::uint8_t>(first) || raw > static_cast<std::uint8_t>(last))
+            r_.fail("an unknown kind " + std::to_string(raw));
+        v = static_cast<E>(raw);
     }
     void format(std::uint32_t v, const char* what) {
         const std::uint32_t got = r_.u32();
