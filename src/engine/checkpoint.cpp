@@ -39,10 +39,10 @@ void CheckpointAccess::system(Io& io, S& s) {
             return s.history_;
         });
     io(s.next_id_);
-    for (auto* c : {&s.x_,  &s.y_,  &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,   &s.fy_,   &s.tq_,
-                    &s.r_,  &s.m_,  &s.inv_m_, &s.inv_I_, &s.x2_,    &s.x3_,   &s.x4_,   &s.y2_,
-                    &s.y3_, &s.y4_, &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_, &s.yref_, &s.wx_,
-                    &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
+    for (auto* c : System::saved_columns(s))
+        io(*c);
+    for (auto* c :
+         {&s.xref_, &s.yref_, &s.wx_, &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
         io(*c);
     for (auto* c : {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_,
                     &s.cell_of_, &s.order_, &s.wcell_start_, &s.wcell_items_})
@@ -134,7 +134,7 @@ void CheckpointAccess::check_invariants(const System& s) {
     if (s.id_.size() != n) inconsistent("particle ids and columns of different lengths");
     if (s.wy_.size() != nw || s.wr_.size() != nw || s.wid_.size() != nw)
         inconsistent("wall columns of different lengths");
-    for (const auto* c : {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_, &s.w4_})
+    for (const auto* c : System::history_columns(s))
         if ((!c->empty() || (s.ready_ && s.config_.scheme == Scheme::gear4)) && c->size() != n)
             inconsistent("integrator history of another length than the particle columns");
     if (s.ready_ && (s.xref_.size() != n || s.yref_.size() != n))

@@ -287,8 +287,7 @@ struct KernelImpl final : System::Kernel {
             const std::size_t n = s.x_.size();
             const double h = 0.5 * s.config_.dt * s.config_.dt;
             const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-            for (auto* col :
-                 {&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_, &s.w4_})
+            for (auto* col : System::history_columns(s))
                 col->assign(n, 0.0);
             for (std::size_t i = 0; i < n; ++i) {
                 s.x2_[i] = h * (s.fx_[i] * s.inv_m_[i] + gx);

@@ -92,8 +92,7 @@ void System::remove_below_floor() {
             keep.push_back(int(i));
     }
     if (keep.size() == y_.size()) return;
-    for (auto* col : {&x_,  &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_,   &inv_m_, &inv_I_,
-                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_, &avx_, &avy_,   &aw_})
+    for (auto* col : particle_columns(*this))
         detail::compact(*col, keep);
     detail::compact(id_, keep);
     if (carry_) detail::compact(carry_old_, keep);  // the springs' old indices follow
@@ -155,8 +154,7 @@ void System::permute_by_cell(double cutoff) {
     const int ncell = grid_nx_ * grid_ny_;
     // Counting sort: order_[new index] = old index.
     bin_points(x_, y_, x0, y0, cs, grid_nx_, grid_ny_, cell_start_, order_, cell_of_);
-    for (auto* col : {&x_,  &y_,  &vx_, &vy_, &w_,  &fx_, &fy_, &tq_, &r_,  &m_,   &inv_m_, &inv_I_,
-                      &x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_, &avx_, &avy_,   &aw_})
+    for (auto* col : particle_columns(*this))
         detail::permute(*col, order_, scratch_);
     detail::permute(id_, order_, iscratch_);
     if (carry_) detail::permute(carry_old_, order_, iscratch_);  // the springs' old indices

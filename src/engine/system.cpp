@@ -209,7 +209,7 @@ int System::index_of(int id) const {
 void System::ensure_ready() {
     if (ready_) return;
     // The integrator's history is rebuilt by prime() below.
-    for (auto* col : {&x2_, &x3_, &x4_, &y2_, &y3_, &y4_, &w2_, &w3_, &w4_})
+    for (auto* col : history_columns(*this))
         col->clear();
     rebuild();
     // The second velocity set (contact corrections) starts as the velocities themselves.

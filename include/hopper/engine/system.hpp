@@ -7,6 +7,8 @@
 // their own columns and are never integrated). Particles are re-sorted by cell at neighbour
 // rebuilds, so the index of a particle changes; its id (returned by add_*) never does.
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -190,6 +192,33 @@ class System {
     template <class Law, Scheme S>
     friend struct KernelImpl;
     friend struct CheckpointAccess;  // checkpoint.cpp: the whole state to bytes and back
+
+    // The per-particle columns of doubles, listed once (issue 42). history_columns: the Gear
+    // integrator's scaled derivatives. saved_columns: the state, the properties and that history,
+    // in the checkpoint's order. particle_columns: those and the second velocity set of the
+    // contact corrections (derived at the start, not saved): what a rebuild reorders and a
+    // removal compacts (the ids go beside). S is System or const System.
+    template <class S>
+    static auto history_columns(S& s) {
+        return std::array{&s.x2_, &s.x3_, &s.x4_, &s.y2_, &s.y3_, &s.y4_, &s.w2_, &s.w3_, &s.w4_};
+    }
+    template <class S>
+    static auto saved_columns(S& s) {
+        const auto h = history_columns(s);
+        return std::array{&s.x_,  &s.y_, &s.vx_, &s.vy_,    &s.w_,     &s.fx_, &s.fy_,
+                          &s.tq_, &s.r_, &s.m_,  &s.inv_m_, &s.inv_I_, h[0],   h[1],
+                          h[2],   h[3],  h[4],   h[5],      h[6],      h[7],   h[8]};
+    }
+    template <class S>
+    static auto particle_columns(S& s) {
+        const auto c = saved_columns(s);
+        std::array<typename decltype(c)::value_type, c.size() + 3> all{};
+        std::copy(c.begin(), c.end(), all.begin());
+        all[c.size()] = &s.avx_;
+        all[c.size() + 1] = &s.avy_;
+        all[c.size() + 2] = &s.aw_;
+        return all;
+    }
 
     detail::ForceArgs force_args();  // the columns and scratch of a force pass
     void ensure_ready();
