@@ -1,7 +1,7 @@
 // Does a real clog hold by itself? (issue 39, part 1; docs/validation.md, "Statics".)
 //
 //   bench_clog_hold [--D-over-d X] [--seeds N] [--first S] [--hold-windows K]
-//                   [--collision-time S] [--max-time S]
+//                   [--collision-time S] [--max-time S] [--mu-r X]
 //
 // The flat silo of campaigns/silo-validation (800 monodisperse disks of d = 0.77 cm, W = 25 d,
 // theta = 0, e_n = 0.2, mu = 0.5, steady state) run to its first clog (the refill protocol ends
@@ -29,7 +29,7 @@ namespace {
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
                  "bench_clog_hold: %s\nusage: bench_clog_hold [--D-over-d X] [--seeds N] "
-                 "[--first S] [--hold-windows K] [--collision-time S] [--max-time S]\n",
+                 "[--first S] [--hold-windows K] [--collision-time S] [--max-time S] [--mu-r X]\n",
                  why.c_str());
     std::exit(2);
 }
@@ -43,7 +43,7 @@ double number(const char* opt, const char* text, double lo, double hi) {
     return v;
 }
 
-SceneParams silo(double D_over_d, double collision_time, double max_time) {
+SceneParams silo(double D_over_d, double collision_time, double max_time, double mu_r) {
     SceneParams p;
     const double d = 0.770 * cm;
     p.hopper.width = 19.25 * cm;
@@ -54,6 +54,7 @@ SceneParams silo(double D_over_d, double collision_time, double max_time) {
     p.material.system = {0.2, 0.5};
     p.material.wall = {0.2, 0.5};
     if (collision_time > 0) p.material.collision_time = collision_time;
+    p.material.mu_r = mu_r;  // rolling resistance (docs/model.md): the silo of issue 39, part 4
     p.protocol.mode = ProtocolMode::steady_state;
     p.protocol.unjam = UnjamMode::refill;
     p.protocol.jams_per_realization = 1;
@@ -64,21 +65,29 @@ SceneParams silo(double D_over_d, double collision_time, double max_time) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    double D_over_d = 3.5, collision_time = -1, max_time = 300, windows = 10;
+    double D_over_d = 3.5, collision_time = -1, max_time = 300, windows = 10, mu_r = 0;
     int seeds = 8, first = 1;
     for (int k = 1; k < argc; k += 2) {
         const std::string o = argv[k];
         if (k + 1 >= argc) usage(o + " needs a value");
-        if (o == "--D-over-d") D_over_d = number("--D-over-d", argv[k + 1], 1.0, 20.0);
-        else if (o == "--seeds") seeds = int(number("--seeds", argv[k + 1], 1, 1e6));
-        else if (o == "--first") first = int(number("--first", argv[k + 1], 0, 1e9));
-        else if (o == "--hold-windows") windows = number("--hold-windows", argv[k + 1], 0.1, 1e5);
+        if (o == "--D-over-d")
+            D_over_d = number("--D-over-d", argv[k + 1], 1.0, 20.0);
+        else if (o == "--seeds")
+            seeds = int(number("--seeds", argv[k + 1], 1, 1e6));
+        else if (o == "--first")
+            first = int(number("--first", argv[k + 1], 0, 1e9));
+        else if (o == "--hold-windows")
+            windows = number("--hold-windows", argv[k + 1], 0.1, 1e5);
         else if (o == "--collision-time")
             collision_time = number("--collision-time", argv[k + 1], 1e-9, 1.0);
-        else if (o == "--max-time") max_time = number("--max-time", argv[k + 1], 0.1, 1e7);
-        else usage("unknown option " + o);
+        else if (o == "--max-time")
+            max_time = number("--max-time", argv[k + 1], 0.1, 1e7);
+        else if (o == "--mu-r")
+            mu_r = number("--mu-r", argv[k + 1], 0.0, 1.0);
+        else
+            usage("unknown option " + o);
     }
-    const SceneParams p = silo(D_over_d, collision_time, max_time);
+    const SceneParams p = silo(D_over_d, collision_time, max_time, mu_r);
     const double d = p.particles.d_large, g = p.gravity;
     const double t_check = 2.0 * std::sqrt(d / g);
     const double half = 0.5 * p.hopper.outlet;
