@@ -129,8 +129,8 @@ INSTEAD = {
     # docs/usage.md's synopses
     ("docs/usage.md", "campaign run SWEEP.toml [--store PATH] [--progress-interval S] [--grace S] "
                       "[--threads N] [--flush-interval S] [--worker-timeout S] [--no-file-locking] "
-                      "[--deadline T] [--checkpoint-interval S] [--no-checkpoints] [--dry-run] "
-                      "[--allow-mixed] [--no-plots]"):
+                      "[--deadline T] [--checkpoint-interval S] [--no-checkpoints] "
+                      "[--max-deaths N] [--dry-run] [--allow-mixed] [--no-plots]"):
         (f"campaign run campaigns/quickstart.toml --store {QS} --dry-run", 0,
          "a synopsis: the quickstart's store, resumed with --dry-run (nothing to run)"),
     ("docs/usage.md", "mpirun -np N campaign run SWEEP.toml ... # rank 0 = master, ranks "
