@@ -297,16 +297,6 @@ void restore_result(RealizationResult& res, StateReader& r) {
     fields(io, res);
 }
 
-void save_moments(const FieldMoments& m, StateWriter& w) {
-    StatePut io(w);
-    fields(io, m);
-}
-
-void restore_moments(FieldMoments& m, StateReader& r) {
-    StateGet io(r);
-    fields(io, m);
-}
-
 // The field accumulator's open window, described once.
 template <class Io, class A>
 void CheckpointAccess::accumulator(Io& io, A& a) {

@@ -255,8 +255,6 @@ struct CheckpointAccess {
     static void accumulator(Io& io, A& a);
 };
 
-void save_moments(const FieldMoments& m, StateWriter& w);
-void restore_moments(FieldMoments& m, StateReader& r);
 void save_result(const RealizationResult& res, StateWriter& w);
 void restore_result(RealizationResult& res, StateReader& r);
 
