@@ -94,9 +94,8 @@ bool State::extend_seeds(int point, int first, std::span<const std::uint64_t> se
 bool State::apply(RunStartRecord&& r) {
     // The previous run died (no end record): what it was running died with it.
     if (!runs.empty() && !runs.back().end) {
-        for (const auto& [task, worker] : in_flight) {
-            TaskEntry& e =
-                tasks[static_cast<std::size_t>(task.first)][static_cast<std::size_t>(task.second)];
+        for (const auto& [p, r] : in_flight) {
+            TaskEntry& e = tasks[static_cast<std::size_t>(p)][static_cast<std::size_t>(r)];
             if (e.deaths < 255) ++e.deaths;
         }
         runs.back().died_running = static_cast<int>(in_flight.size());
@@ -139,16 +138,8 @@ bool State::apply(const AllotmentRecord& r) {
 }
 
 std::int64_t State::apply(const ResultRecord& r, const engine::RealizationResult& result) {
-    const int p = find_point(r.label);
-    if (p < 0)
-        throw core::StoreError("journal holds a result for point '" + r.label +
-                               "', which no run planned (damaged journal)");
-    if (r.realization < 0)
-        throw core::StoreError("journal holds a result with a negative realization index");
-    auto& t = tasks[static_cast<std::size_t>(p)];
-    if (static_cast<std::size_t>(r.realization) >= t.size())
-        t.resize(static_cast<std::size_t>(r.realization) + 1);
-    TaskEntry& e = t[static_cast<std::size_t>(r.realization)];
+    const auto [p, entry] = entry_for(r.label, r.realization, "a result");
+    TaskEntry& e = *entry;
     if (e.result) {
         ++duplicates;
         return -1;
@@ -167,16 +158,8 @@ std::int64_t State::apply(const ResultRecord& r, const engine::RealizationResult
 }
 
 int State::apply(const ErrorRecord& r) {
-    const int p = find_point(r.label);
-    if (p < 0)
-        throw core::StoreError("journal holds an error for point '" + r.label +
-                               "', which no run planned (damaged journal)");
-    auto& t = tasks[static_cast<std::size_t>(p)];
-    if (r.realization < 0)
-        throw core::StoreError("journal holds an error with a negative realization index");
-    if (static_cast<std::size_t>(r.realization) >= t.size())
-        t.resize(static_cast<std::size_t>(r.realization) + 1);
-    TaskEntry& e = t[static_cast<std::size_t>(r.realization)];
+    const auto [p, entry] = entry_for(r.label, r.realization, "an error");
+    TaskEntry& e = *entry;
     ++e.errors;
     in_flight.erase({p, r.realization});
     messages[{p, r.realization}].last_error = r.reason;
@@ -191,16 +174,22 @@ void State::apply(const RunEndRecord& r) {
 }
 
 void State::apply(const DispatchRecord& r) {
-    const int p = find_point(r.label);
+    in_flight.insert({entry_for(r.label, r.realization, "a dispatch").first, r.realization});
+}
+
+std::pair<int, TaskEntry*> State::entry_for(const std::string& label, int realization,
+                                            const char* what) {
+    const int p = find_point(label);
     if (p < 0)
-        throw core::StoreError("journal hands out a realization of point '" + r.label +
+        throw core::StoreError(std::string("journal holds ") + what + " for point '" + label +
                                "', which no run planned (damaged journal)");
+    if (realization < 0)
+        throw core::StoreError(std::string("journal holds ") + what +
+                               " with a negative realization index");
     auto& t = tasks[static_cast<std::size_t>(p)];
-    if (r.realization < 0 || static_cast<std::size_t>(r.realization) >= t.size())
-        throw core::StoreError("journal hands out realization " + std::to_string(r.realization) +
-                               " of point '" + r.label + "', which has " +
-                               std::to_string(t.size()) + " (damaged journal)");
-    in_flight[{p, r.realization}] = r.rank;
+    if (static_cast<std::size_t>(realization) >= t.size())
+        t.resize(static_cast<std::size_t>(realization) + 1);
+    return {p, &t[static_cast<std::size_t>(realization)]};
 }
 
 const State::Messages& State::message_of(int point, int realization) const {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <utility>
@@ -37,10 +38,10 @@ struct State {
     std::optional<RecordType> last_type;
     std::uint64_t last_offset = 0;
     std::optional<SyncRecord> last_sync;
-    // The realizations handed out by the latest run and not answered yet (DispatchRecord;
-    // value: the worker): when the next run starts and that run has no end record, each of
-    // them gets a death (TaskEntry::deaths).
-    std::map<std::pair<int, int>, int> in_flight;
+    // The realizations (point, realization) handed out by the latest run and not answered yet
+    // (DispatchRecord): when the next run starts and that run has no end record, each of them
+    // gets a death (TaskEntry::deaths).
+    std::set<std::pair<int, int>> in_flight;
 
     // Each returns what changed, for the HDF5 writer.
     // True when the union plan changed (new points or realizations).
@@ -54,6 +55,10 @@ struct State {
     int apply(const ErrorRecord& r);
     void apply(const RunEndRecord& r);
     void apply(const DispatchRecord& r);
+    // The entry of realization `realization` of point `label` (the tasks grown to hold it), for
+    // a record of `what` kind; throws for an unknown point or a negative index.
+    std::pair<int, TaskEntry*> entry_for(const std::string& label, int realization,
+                                         const char* what);
 
     // Whether the HDF5 file was closed in step with the journal, judged from the journal alone:
     // the last record is a sync record written right after the file was closed at that length.
