@@ -15,13 +15,7 @@ reference
 
 # 1. Memory. mini.toml's points plus one of 400 000 disks (its arrays alone need ~100 MB).
 MEM=$WORK/mem.toml
-cat "$MINI" - >"$MEM" <<'EOF'
-
-[[points]]
-D_cm = 2.6
-hopper.particles = 400000
-hopper.width_cm = 400.0
-EOF
+big_point_sweep "$MEM"
 LIMIT_KB=150000  # a worker rank of mini.toml needs about 40 MB here
 run_expect 3 mem mpirun -np 1 "$EXE" run "$MEM" --store mem.h5 --progress-interval 0 \
     : -np 2 bash -c "ulimit -d $LIMIT_KB && exec $EXE run $MEM --store mem.h5 --progress-interval 0"

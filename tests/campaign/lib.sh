@@ -50,6 +50,19 @@ reference() {
     [ "$(wc -l <"$WORK/ref.digest")" -eq 12 ] || fail "reference has $(wc -l <"$WORK/ref.digest") realizations"
 }
 
+# big_point_sweep OUT: mini.toml's points plus one of 400 000 disks (its arrays alone need
+# ~100 MB, where a worker rank of mini.toml needs about 40): the memory faults' sweep
+# (cluster_faults.sh, oom_kill.sh).
+big_point_sweep() {
+    cat "$MINI" - >"$1" <<'EOF'
+
+[[points]]
+D_cm = 2.6
+hopper.particles = 400000
+hopper.width_cm = 400.0
+EOF
+}
+
 # start_job CMD...: starts CMD in a new session (so that a kill reaches mpirun and every rank);
 # sets JOB to the session leader's pid.
 start_job() {

@@ -17,13 +17,7 @@ source "$(dirname "$0")/lib.sh"
 reference
 
 MEM=$WORK/mem.toml
-cat "$MINI" - >"$MEM" <<'TOML'
-
-[[points]]
-D_cm = 2.6
-hopper.particles = 400000
-hopper.width_cm = 400.0
-TOML
+big_point_sweep "$MEM"
 LIMIT_MB=150  # a worker rank of mini.toml needs about 40 MB
 
 CG=""
