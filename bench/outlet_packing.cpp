@@ -73,14 +73,22 @@ int main(int argc, char** argv) {
     for (int k = 1; k < argc; k += 2) {
         const std::string o = argv[k];
         if (k + 1 >= argc) usage(o + " needs a value");
-        if (o == "--D-over-d") D_over_d = number(o, argv[k + 1], 1.0, 20.0);
-        else if (o == "--seeds") seeds = int(number(o, argv[k + 1], 1, 1e6));
-        else if (o == "--first") first = int(number(o, argv[k + 1], 0, 1e9));
-        else if (o == "--flow-s") flow_s = number(o, argv[k + 1], 0.01, 1e6);
-        else if (o == "--radius") radius = number(o, argv[k + 1], 0.5, 20);
-        else if (o == "--collision-time") collision_time = number(o, argv[k + 1], 1e-9, 1.0);
-        else if (o == "--dump-opening") dump = argv[k + 1];
-        else usage("unknown option " + o);
+        if (o == "--D-over-d")
+            D_over_d = number(o, argv[k + 1], 1.0, 20.0);
+        else if (o == "--seeds")
+            seeds = int(number(o, argv[k + 1], 1, 1e6));
+        else if (o == "--first")
+            first = int(number(o, argv[k + 1], 0, 1e9));
+        else if (o == "--flow-s")
+            flow_s = number(o, argv[k + 1], 0.01, 1e6);
+        else if (o == "--radius")
+            radius = number(o, argv[k + 1], 0.5, 20);
+        else if (o == "--collision-time")
+            collision_time = number(o, argv[k + 1], 1e-9, 1.0);
+        else if (o == "--dump-opening")
+            dump = argv[k + 1];
+        else
+            usage("unknown option " + o);
     }
     SceneParams p;
     const double d = 0.770 * cm;

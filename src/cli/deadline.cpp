@@ -73,9 +73,9 @@ std::optional<double> local_seconds(int y, int mo, int d, int h, int mi, int s) 
     tm.tm_isdst = -1;  // let the zone's rules say whether daylight-saving time applies
     const std::time_t t = std::mktime(&tm);
     std::tm back{};
-    if (t == static_cast<std::time_t>(-1) || !localtime_r(&t, &back) ||
-        back.tm_year != y - 1900 || back.tm_mon != mo - 1 || back.tm_mday != d ||
-        back.tm_hour != h || back.tm_min != mi || back.tm_sec != s)
+    if (t == static_cast<std::time_t>(-1) || !localtime_r(&t, &back) || back.tm_year != y - 1900 ||
+        back.tm_mon != mo - 1 || back.tm_mday != d || back.tm_hour != h || back.tm_min != mi ||
+        back.tm_sec != s)
         return std::nullopt;
     return static_cast<double>(t);
 }
@@ -134,14 +134,15 @@ std::optional<double> parse_deadline(const std::string& text, double now) {
         return checked(text, number(text, m[1].str()));
     // ISO 8601: date, T, time with optional fractional seconds, then Z, an offset +hh:mm or
     // +hhmm, or nothing (local time).
-    if (std::regex_match(text, m,
-                         std::regex(R"(([0-9]{4})-([0-9]{2})-([0-9]{2})T([0-9]{2}):([0-9]{2}):)"
-                                    R"(([0-9]{2})(\.[0-9]{1,9})?(Z|([+-])([0-9]{2}):?([0-9]{2}))?)"))) {
+    if (std::regex_match(
+            text, m,
+            std::regex(R"(([0-9]{4})-([0-9]{2})-([0-9]{2})T([0-9]{2}):([0-9]{2}):)"
+                       R"(([0-9]{2})(\.[0-9]{1,9})?(Z|([+-])([0-9]{2}):?([0-9]{2}))?)"))) {
         auto field = [&](int k) { return std::stoi(m[k].str()); };
         const bool local = !m[8].matched;
-        const auto t = local
-                           ? local_seconds(field(1), field(2), field(3), field(4), field(5), field(6))
-                           : utc_seconds(field(1), field(2), field(3), field(4), field(5), field(6));
+        const auto t =
+            local ? local_seconds(field(1), field(2), field(3), field(4), field(5), field(6))
+                  : utc_seconds(field(1), field(2), field(3), field(4), field(5), field(6));
         if (!t)
             bad(text, local ? "not a valid local date and time (no such day, hour, minute or "
                               "second here, or an hour skipped by daylight-saving time)"

@@ -62,7 +62,6 @@ TEST(ParseDeadline, AbsurdNumbersGiveTheDeadlineError) {
     EXPECT_EQ(parse_deadline("@99999999999", 0), 99999999999.0);  // year 5138: taken
 }
 
-
 // Issue 43, item 8: what `date +%FT%T%z` prints (+0100, no colon), fractional seconds, local
 // times without a zone (the TZ of the machine; a POSIX rule here, so no zone files are needed),
 // days and fractions of them from now.
@@ -83,7 +82,10 @@ TEST(ParseDeadline, DateCommandOffsetsFractionsLocalTimesAndDays) {
     const double winter = parse_deadline("2026-11-26T02:19:56", 0).value();
     const double summer = parse_deadline("2026-07-01T14:00:00", 0).value();  // 12:00Z
     const std::string gap = error_of("2026-03-29T02:30:00");  // skipped: 02:00 -> 03:00
-    if (old_tz) setenv("TZ", saved.c_str(), 1); else unsetenv("TZ");
+    if (old_tz)
+        setenv("TZ", saved.c_str(), 1);
+    else
+        unsetenv("TZ");
     tzset();
     EXPECT_EQ(winter, t);
     EXPECT_EQ(summer, 1782907200.0);

@@ -4,10 +4,10 @@
 //
 // 1. A block on an incline. A disk whose moment of inertia is made enormous (1e16 m R^2) cannot
 //    turn: it is a block that can only stick or slide (with 1e9 m R^2 it still rolls off at
-//    g sin beta / 1e9, 4e-8 m/s after 10 s, with its contact stuck: measured while writing this). On a floor tilted by beta (gravity
-//    g (sin beta, -cos beta), downhill +x) the static tangential spring must carry
-//    m g sin beta as long as that is below the Coulomb limit mu m g cos beta, i.e. for
-//    tan beta < mu. Below: after the spring has loaded (0.5 s), the block must not move
+//    g sin beta / 1e9, 4e-8 m/s after 10 s, with its contact stuck: measured while writing this).
+//    On a floor tilted by beta (gravity g (sin beta, -cos beta), downhill +x) the static tangential
+//    spring must carry m g sin beta as long as that is below the Coulomb limit mu m g cos beta,
+//    i.e. for tan beta < mu. Below: after the spring has loaded (0.5 s), the block must not move
 //    (creep measured over 10 s). Above: it slides with a = g (sin beta - mu cos beta), the
 //    kinetic friction of the capped spring (docs/model.md, tangential force). The sliding cases
 //    take e_n = 1 (no dashpots): a floor of disks is not flat for a sliding block, which
@@ -58,8 +58,7 @@ struct BlockRun {
 BlockRun block_on_incline(Scheme scheme, double mu, double tan_beta, double t_end, double e_n) {
     const double beta = std::atan(tan_beta);
     const ContactParams cp = contact_params(e_n, mu);
-    System s(system_config(scheme, 50.0, cp, cp,
-                           Vec2(g * std::sin(beta), -g * std::cos(beta))));
+    System s(system_config(scheme, 50.0, cp, cp, Vec2(g * std::sin(beta), -g * std::cos(beta))));
     for (double x = -0.05; x <= 0.6; x += 0.0005)
         s.add_wall(Vec2(x, -R_w), 2 * R_w);
     const double R = 0.5 * d_large, m = m_large;
@@ -90,11 +89,11 @@ TEST_P(Incline, ABlockBelowTheFrictionAngleStaysAtRest) {
     const double mu = 0.5, tan_beta = 0.8 * mu;  // beta = 21.8 deg < atan(0.5) = 26.6 deg
     const BlockRun r = block_on_incline(GetParam(), mu, tan_beta, 10.5, 0.5);
     const double creep = std::abs(r.x_end - r.x_loaded);
-    std::printf("[ measured ] %s, tan beta = 0.8 mu: moved %.3g d_large in 10 s after loading "
-                "(spring stretch m g sin beta / k_t = %.3g d_large); largest speed %.3g m/s\n",
-                to_string(GetParam()).c_str(), creep / d_large,
-                m_large * g * std::sin(std::atan(tan_beta)) / (0.8 * k_n) / d_large,
-                r.v_max_late);
+    std::printf(
+        "[ measured ] %s, tan beta = 0.8 mu: moved %.3g d_large in 10 s after loading "
+        "(spring stretch m g sin beta / k_t = %.3g d_large); largest speed %.3g m/s\n",
+        to_string(GetParam()).c_str(), creep / d_large,
+        m_large * g * std::sin(std::atan(tan_beta)) / (0.8 * k_n) / d_large, r.v_max_late);
     EXPECT_LT(creep, 1e-6 * d_large) << "a block that Coulomb friction holds crept";
     EXPECT_LT(r.v_max_late, 1e-6);
 }
@@ -104,9 +103,10 @@ TEST_P(Incline, ABlockAboveTheFrictionAngleSlidesAtTheKineticRate) {
     const double beta = std::atan(tan_beta);
     const BlockRun r = block_on_incline(GetParam(), mu, tan_beta, 0.4, 1.0);
     const double a = g * (std::sin(beta) - mu * std::cos(beta));
-    std::printf("[ measured ] %s, tan beta = 1.2 mu: a = %.6g m/s^2, expected g (sin beta - "
-                "mu cos beta) = %.6g\n",
-                to_string(GetParam()).c_str(), r.accel, a);
+    std::printf(
+        "[ measured ] %s, tan beta = 1.2 mu: a = %.6g m/s^2, expected g (sin beta - "
+        "mu cos beta) = %.6g\n",
+        to_string(GetParam()).c_str(), r.accel, a);
     EXPECT_NEAR(r.accel, a, 0.005 * a);
 }
 
@@ -115,11 +115,13 @@ TEST_P(Incline, TheThresholdIsTheFrictionAngle) {
     const double mu = 0.5;
     const BlockRun below = block_on_incline(GetParam(), mu, 0.98 * mu, 2.0, 0.5);
     const BlockRun above = block_on_incline(GetParam(), mu, 1.02 * mu, 1.0, 1.0);
-    const double a_above = g * (std::sin(std::atan(1.02 * mu)) - mu * std::cos(std::atan(1.02 * mu)));
-    std::printf("[ measured ] %s: at 0.98 mu moved %.3g d_large after loading; at 1.02 mu "
-                "a = %.4g m/s^2 (expected %.4g)\n",
-                to_string(GetParam()).c_str(), std::abs(below.x_end - below.x_loaded) / d_large,
-                above.accel, a_above);
+    const double a_above =
+        g * (std::sin(std::atan(1.02 * mu)) - mu * std::cos(std::atan(1.02 * mu)));
+    std::printf(
+        "[ measured ] %s: at 0.98 mu moved %.3g d_large after loading; at 1.02 mu "
+        "a = %.4g m/s^2 (expected %.4g)\n",
+        to_string(GetParam()).c_str(), std::abs(below.x_end - below.x_loaded) / d_large,
+        above.accel, a_above);
     EXPECT_LT(std::abs(below.x_end - below.x_loaded), 1e-6 * d_large);
     EXPECT_NEAR(above.accel, a_above, 0.01 * a_above);
 }
@@ -145,10 +147,10 @@ ContactParams campaign_contact(const Material& m) {
 }
 
 struct ArchRun {
-    int held = 0, fell = 0;       // disks left at the end; fallen through during the hold
-    double creep = 0.0;           // largest displacement over the last 9 s, m
-    double v_max_late = 0.0;      // largest speed over the last 9 s, m/s
-    double kappa = 0.0;           // k_n d / (m g)
+    int held = 0, fell = 0;   // disks left at the end; fallen through during the hold
+    double creep = 0.0;       // largest displacement over the last 9 s, m
+    double v_max_late = 0.0;  // largest speed over the last 9 s, m/s
+    double kappa = 0.0;       // k_n d / (m g)
 };
 
 ArchRun arch_over_gap(const Material& mat) {
@@ -171,9 +173,8 @@ ArchRun arch_over_gap(const Material& mat) {
     const double a = 1.05 * d;
     const int per_row = int(2.0 * half_w / a);
     for (int k = 0; k < 40; ++k)
-        ids.push_back(add_disk(s, Vec2(-half_w + (k % per_row + 0.5) * a,
-                                       1.5 * d + (k / per_row) * a),
-                               d));
+        ids.push_back(
+            add_disk(s, Vec2(-half_w + (k % per_row + 0.5) * a, 1.5 * d + (k / per_row) * a), d));
     const auto steps_per_s = std::int64_t(std::llround(1.0 / s.dt()));
     s.run(steps_per_s);  // 1 s: fallen, clogged, settling
     std::vector<Vec2> p0;
@@ -209,11 +210,11 @@ class Arch : public ::testing::TestWithParam<Material> {};
 TEST_P(Arch, ALoadedArchOverAGapHoldsWithoutCreep) {
     const Material& m = GetParam();
     const ArchRun r = arch_over_gap(m);
-    std::printf("[ measured ] %s (kappa = k_n d / (m g) = %.3g): %d disks held, %d fell; "
-                "largest displacement over 9 s %.3g d_large (%.3g d_large per s); largest "
-                "speed %.3g m/s\n",
-                m.name, r.kappa, r.held, r.fell, r.creep / d_large, r.creep / d_large / 9.0,
-                r.v_max_late);
+    std::printf(
+        "[ measured ] %s (kappa = k_n d / (m g) = %.3g): %d disks held, %d fell; "
+        "largest displacement over 9 s %.3g d_large (%.3g d_large per s); largest "
+        "speed %.3g m/s\n",
+        m.name, r.kappa, r.held, r.fell, r.creep / d_large, r.creep / d_large / 9.0, r.v_max_late);
     ASSERT_GE(r.held, 20) << "the pile did not clog over the gap: no arch to test";
     EXPECT_EQ(r.fell, 0) << "the arch broke during the hold";
     EXPECT_LT(r.creep, 1e-6 * d_large) << "the arch crept";
