@@ -1,7 +1,7 @@
 // Does a real clog hold by itself? (issue 39, part 1; docs/validation.md, "Statics".)
 //
 //   bench_clog_hold [--D-over-d X] [--seeds N] [--first S] [--hold-windows K]
-//                   [--collision-time S] [--max-time S] [--mu-r X]
+//                   [--collision-time S] [--max-time S] [--mu-r X] [--rolling-law L]
 //
 // The flat silo of campaigns/silo-validation (800 monodisperse disks of d = 0.77 cm, W = 25 d,
 // theta = 0, e_n = 0.2, mu = 0.5, steady state) run to its first clog (the refill protocol ends
@@ -29,7 +29,8 @@ namespace {
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
                  "bench_clog_hold: %s\nusage: bench_clog_hold [--D-over-d X] [--seeds N] "
-                 "[--first S] [--hold-windows K] [--collision-time S] [--max-time S] [--mu-r X]\n",
+                 "[--first S] [--hold-windows K] [--collision-time S] [--max-time S] [--mu-r X] "
+                 "[--rolling-law constant|spring]\n",
                  why.c_str());
     std::exit(2);
 }
@@ -43,7 +44,8 @@ double number(const char* opt, const char* text, double lo, double hi) {
     return v;
 }
 
-SceneParams silo(double D_over_d, double collision_time, double max_time, double mu_r) {
+SceneParams silo(double D_over_d, double collision_time, double max_time, double mu_r,
+                 RollingLaw rolling_law) {
     SceneParams p;
     const double d = 0.770 * cm;
     p.hopper.width = 19.25 * cm;
@@ -55,6 +57,7 @@ SceneParams silo(double D_over_d, double collision_time, double max_time, double
     p.material.wall = {0.2, 0.5};
     if (collision_time > 0) p.material.collision_time = collision_time;
     p.material.mu_r = mu_r;  // rolling resistance (docs/model.md): the silo of issue 39, part 4
+    p.material.rolling_law = rolling_law;
     p.protocol.mode = ProtocolMode::steady_state;
     p.protocol.unjam = UnjamMode::refill;
     p.protocol.jams_per_realization = 1;
@@ -66,6 +69,7 @@ SceneParams silo(double D_over_d, double collision_time, double max_time, double
 
 int main(int argc, char** argv) {
     double D_over_d = 3.5, collision_time = -1, max_time = 300, windows = 10, mu_r = 0;
+    RollingLaw rolling_law = RollingLaw::constant;
     int seeds = 8, first = 1;
     for (int k = 1; k < argc; k += 2) {
         const std::string o = argv[k];
@@ -84,10 +88,16 @@ int main(int argc, char** argv) {
             max_time = number("--max-time", argv[k + 1], 0.1, 1e7);
         else if (o == "--mu-r")
             mu_r = number("--mu-r", argv[k + 1], 0.0, 1.0);
-        else
+        else if (o == "--rolling-law") {
+            const std::string l = argv[k + 1];
+            if (l != "constant" && l != "spring")
+                usage("--rolling-law '" + l + "': expected constant or spring");
+            rolling_law = l == "spring" ? RollingLaw::spring : RollingLaw::constant;
+        } else
             usage("unknown option " + o);
     }
-    const SceneParams p = silo(D_over_d, collision_time, max_time, mu_r);
+    const SceneParams p = silo(D_over_d, collision_time, max_time, mu_r, rolling_law);
+    validate_scene(p);
     const double d = p.particles.d_large, g = p.gravity;
     const double t_check = 2.0 * std::sqrt(d / g);
     const double half = 0.5 * p.hopper.outlet;

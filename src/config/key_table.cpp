@@ -173,6 +173,14 @@ const std::vector<KeyDef> table = {
            [](P& p, V v) { p.material.mu_r = num(v); },
            [](const P& p) -> Read { return p.material.mu_r; },
            FP{"material.mu_r", 47, Enters::unless_default}},
+    KeyDef{"material", "rolling_law", "material.rolling_law", Kind::choice, 0, 0, closed, closed,
+           "",
+           [](P& p, V v) {
+               using L = engine::RollingLaw;
+               p.material.rolling_law = choice_of(v, {L::constant, L::spring});
+           },
+           [](const P& p) -> Read { return engine::to_string(p.material.rolling_law); },
+           FP{"material.rolling_law", 68, Enters::unless_default}, nullptr, "constant,spring"},
     KeyDef{"material", "plate_friction", "material.plate_friction", Kind::real, 0, 1, closed, closed, "",
            [](P& p, V v) { p.material.plate_friction = num(v); },
            [](const P& p) -> Read { return p.material.plate_friction; },

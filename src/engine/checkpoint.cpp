@@ -44,6 +44,12 @@ void CheckpointAccess::system(Io& io, S& s) {
     for (auto* c :
          {&s.xref_, &s.yref_, &s.wx_, &s.wy_, &s.wr_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
         io(*c);
+    // The rolling springs (issue 39), only in the states of a law that has them: a state of any
+    // other law has the bytes it had before (format 2). Which law a state was written with is
+    // fixed by the scene its fingerprint names (material.rolling_law).
+    if (s.rolling_history_)
+        for (auto* c : {&s.pxi_r_, &s.wxi_r_})
+            io(*c);
     for (auto* c : {&s.id_, &s.wid_, &s.pstart_, &s.pj_, &s.wstart_, &s.wj_, &s.cell_start_,
                     &s.cell_of_, &s.order_, &s.wcell_start_, &s.wcell_items_})
         io(*c);
@@ -140,10 +146,10 @@ void CheckpointAccess::check_invariants(const System& s) {
     if (s.ready_ && (s.xref_.size() != n || s.yref_.size() != n))
         inconsistent("reference positions of another length than the particle columns");
     // Finite values; sizes, masses and inertias positive.
-    for (const auto* c :
-         {&s.x_,    &s.y_,  &s.vx_, &s.vy_,    &s.w_,     &s.fx_,    &s.fy_,   &s.tq_, &s.x2_,
-          &s.x3_,   &s.x4_, &s.y2_, &s.y3_,    &s.y4_,    &s.w2_,    &s.w3_,   &s.w4_, &s.xref_,
-          &s.yref_, &s.wx_, &s.wy_, &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_})
+    for (const auto* c : {&s.x_,     &s.y_,     &s.vx_,    &s.vy_,    &s.w_,     &s.fx_,   &s.fy_,
+                          &s.tq_,    &s.x2_,    &s.x3_,    &s.x4_,    &s.y2_,    &s.y3_,   &s.y4_,
+                          &s.w2_,    &s.w3_,    &s.w4_,    &s.xref_,  &s.yref_,  &s.wx_,   &s.wy_,
+                          &s.pxi_x_, &s.pxi_y_, &s.wxi_x_, &s.wxi_y_, &s.pxi_r_, &s.wxi_r_})
         if (!all_finite(*c)) inconsistent("a non-finite position, velocity, force or spring");
     for (const auto* c : {&s.r_, &s.m_, &s.inv_m_, &s.inv_I_, &s.wr_})
         if (!all_positive(*c)) inconsistent("a radius, mass or inertia that is not positive");
@@ -176,10 +182,12 @@ void CheckpointAccess::check_invariants(const System& s) {
                     inconsistent("a neighbour list partner out of range");
     for (int j : s.wj_)
         if (j < 0 || std::size_t(j) >= nw) inconsistent("a wall partner out of range");
-    if (s.history_ && !s.pstart_.empty() &&
-        (s.pxi_x_.size() != s.pj_.size() || s.pxi_y_.size() != s.pj_.size() ||
-         s.wxi_x_.size() != s.wj_.size() || s.wxi_y_.size() != s.wj_.size()))
-        inconsistent("tangential springs of another length than the neighbour list");
+    if (!s.pstart_.empty()) {
+        const auto ps = System::pair_springs(s), ws = System::wall_springs(s);
+        for (std::size_t c = 0; c < s.spring_count(); ++c)
+            if (ps[c]->size() != s.pj_.size() || ws[c]->size() != s.wj_.size())
+                inconsistent("contact springs of another length than the neighbour list");
+    }
     // Springs are carried across a rebuild inside it (System::save_history), never between
     // steps: a state cannot hold them half way.
     if (s.history_saved_) inconsistent("springs saved for a rebuild that has not run");

@@ -34,6 +34,7 @@ struct ForceArgs {
     double *fx, *fy, *tq;
     const int *ps, *pj, *ws, *wj;  // neighbour list (CSR by mobile index)
     double *hx, *hy, *gx, *gy;     // springs of mobile and wall pairs (null without history)
+    double *hr, *gr;               // rolling springs of mobile and wall pairs (null without)
     const double *wx, *wy, *wr;    // walls (base positions)
     double ox, oy, vwx, vwy;       // wall offset and velocity
     ContactParams pp, pw;
@@ -49,7 +50,7 @@ struct ForceArgs {
     // indices on every path; the law's results on the batched paths, null on the reference).
     struct Scratch {
         int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
-        double *fx, *fy, *ti, *tj, *sx, *sy, *ov;  // per touching entry
+        double *fx, *fy, *ti, *tj, *sx, *sy, *ov, *sr;  // per touching entry
     } scratch;
 };
 

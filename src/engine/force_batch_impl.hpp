@@ -63,6 +63,7 @@ template <class Law, bool Wall>
 struct PairColumns {
     static constexpr bool rot = Law::has_tangential;
     static constexpr bool hist = Law::has_history;
+    static constexpr bool rhist = law_has_rolling_spring<Law>;
     const int* __restrict own;    // the particle of each list entry
     const int* __restrict other;  // its partner (a mobile index, or a wall's)
     const double* __restrict x, * __restrict y, * __restrict r;
@@ -71,6 +72,7 @@ struct PairColumns {
     const double* __restrict svx, * __restrict svy, * __restrict sw;  // the springs' velocities
     double* __restrict fx, * __restrict fy, * __restrict tq;
     double* __restrict hx, * __restrict hy;  // the springs (null without history)
+    double* __restrict hr;                   // the rolling springs (null without them)
     const double* __restrict mbar;           // m_i m_j / (m_i + m_j), set at the rebuild
     const double* __restrict rstar, * __restrict hK, * __restrict heta;  // pair constants
     ContactParams p;
@@ -96,6 +98,7 @@ struct PairColumns {
           tq(a.tq),
           hx(Wall ? a.gx : a.hx),
           hy(Wall ? a.gy : a.hy),
+          hr(Wall ? a.gr : a.hr),
           mbar(Wall ? a.wmbar : a.pmbar),
           rstar(Wall ? a.wrstar : a.prstar),
           hK(Wall ? a.wK : a.pK),
@@ -127,11 +130,13 @@ struct PairColumns {
     // bits: GCC turns a select of a stored value into a branch where it does not vectorize the
     // loop (the reference and the baseline build), unpredictable on the touch test.
     HOPPER_HOT_INLINE void reset_spring(int k, bool touch) const {
+        const std::uint64_t keep = std::uint64_t(0) - std::uint64_t(touch);
         if constexpr (hist) {
-            const std::uint64_t keep = std::uint64_t(0) - std::uint64_t(touch);
             hx[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hx[k]) & keep);
             hy[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hy[k]) & keep);
         }
+        if constexpr (rhist)
+            hr[k] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(hr[k]) & keep);
     }
 
     // The law's input for a touching entry: the separation and radii recomputed exactly as the
@@ -269,12 +274,14 @@ void accumulate(const ForceArgs& a, int i0, int m, double* __restrict fxi, doubl
     const double* __restrict stj = a.scratch.tj;
     const double* __restrict ssx = a.scratch.sx;
     const double* __restrict ssy = a.scratch.sy;
+    const double* __restrict ssr = a.scratch.sr;
     for (int t = 0; t < m; ++t) {
         c.add(owner[t] - i0, partner[t], sfx[t], sfy[t], sti[t], stj[t], fxi, fyi, tqi);
         if constexpr (Law::has_history) {
             c.hx[entry[t]] = ssx[t];
             c.hy[entry[t]] = ssy[t];
         }
+        if constexpr (law_has_rolling_spring<Law>) c.hr[entry[t]] = ssr[t];
     }
 }
 
@@ -292,13 +299,16 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
     const int* __restrict owner = a.scratch.owner;
     const int* __restrict partner = a.scratch.partner;
     if constexpr (one_lane) {
-        double no_spring_x = 0.0, no_spring_y = 0.0;  // stands in when there is no history
+        // stand in when there is no history
+        double no_spring_x = 0.0, no_spring_y = 0.0, no_spring_r = 0.0;
         for (int t = 0; t < m; ++t) {
             const int k = entry[t], i = owner[t], j = partner[t];
             const PairInput q = c.template input<Corr>(k, i, j);
             double& sx = hist ? c.hx[k] : no_spring_x;
             double& sy = hist ? c.hy[k] : no_spring_y;
-            const PairOutput o = pair_force<Law, Corr, false>(c.p, c.dt, c.lever_half, q, sx, sy);
+            double& sr = law_has_rolling_spring<Law> ? c.hr[k] : no_spring_r;
+            const PairOutput o =
+                pair_force<Law, Corr, false>(c.p, c.dt, c.lever_half, q, sx, sy, sr);
             c.add(i - i0, j, o.fx, o.fy, o.ti, o.tj, fxi, fyi, tqi);
             max_ov = o.overlap > max_ov ? o.overlap : max_ov;
         }
@@ -312,17 +322,20 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
         double* __restrict otj = a.scratch.tj;
         double* __restrict osx = a.scratch.sx;
         double* __restrict osy = a.scratch.sy;
+        double* __restrict osr = a.scratch.sr;
         double* __restrict oov = a.scratch.ov;
 #pragma omp simd simdlen(HOPPER_FORCE_SIMDLEN)
         for (int t = 0; t < m; ++t) {
             const int k = entry[t];
             const PairInput q = c.template input<Corr>(k, owner[t], partner[t]);
-            double sx = 0.0, sy = 0.0;
+            double sx = 0.0, sy = 0.0, sr = 0.0;
             if constexpr (hist) {
                 sx = c.hx[k];
                 sy = c.hy[k];
             }
-            const PairOutput o = pair_force<Law, Corr, true>(c.p, c.dt, c.lever_half, q, sx, sy);
+            if constexpr (law_has_rolling_spring<Law>) sr = c.hr[k];
+            const PairOutput o =
+                pair_force<Law, Corr, true>(c.p, c.dt, c.lever_half, q, sx, sy, sr);
             ofx[t] = o.fx;
             ofy[t] = o.fy;
             if constexpr (rot) {
@@ -333,6 +346,7 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
                 osx[t] = sx;
                 osy[t] = sy;
             }
+            if constexpr (law_has_rolling_spring<Law>) osr[t] = sr;
             oov[t] = o.overlap;
         }
         // The largest overlap, in a loop of its own (a floating-point max reduction would keep

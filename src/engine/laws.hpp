@@ -23,7 +23,8 @@ struct LawList {
 
 // The registry. The order is the law's id (law_id<Law>); it is not stored anywhere.
 using Laws = LawList<FrictionlessLaw, ViscousFrictionLaw, SpringFrictionLaw, HertzSpringLaw,
-                     WithRolling<SpringFrictionLaw>, WithRolling<HertzSpringLaw>, HertzViscousLaw>;
+                     WithRolling<SpringFrictionLaw>, WithRolling<HertzSpringLaw>, HertzViscousLaw,
+                     WithRollingSpring<SpringFrictionLaw>>;
 inline constexpr std::size_t law_count = Laws::size;
 
 namespace laws_impl {
@@ -59,17 +60,20 @@ struct LawTraits {
     NormalLaw normal;
     TangentialLaw tangential;
     bool rolling;
+    bool rolling_spring;  // the rolling resistance is a spring: a third history column
     bool has_history;
 };
 inline constexpr auto law_traits = for_each_law([]<class L>() {
-    return LawTraits{L::normal, L::tangential, law_resists_rolling<L>, L::has_history};
+    return LawTraits{L::normal, L::tangential, law_resists_rolling<L>, law_has_rolling_spring<L>,
+                     L::has_history};
 });
 
 // The id of the registered law with these parts, or -1 when none has them.
-constexpr int law_for(NormalLaw normal, TangentialLaw tangential, bool rolling) {
+constexpr int law_for(NormalLaw normal, TangentialLaw tangential, bool rolling,
+                      bool rolling_spring = false) {
     for (std::size_t i = 0; i < law_count; ++i)
         if (law_traits[i].normal == normal && law_traits[i].tangential == tangential &&
-            law_traits[i].rolling == rolling)
+            law_traits[i].rolling == rolling && law_traits[i].rolling_spring == rolling_spring)
             return int(i);
     return -1;
 }

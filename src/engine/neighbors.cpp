@@ -300,10 +300,11 @@ void System::save_history() {
     old_pj_.swap(pj_);
     old_wstart_.swap(wstart_);
     old_wj_.swap(wj_);
-    old_hx_.swap(pxi_x_);
-    old_hy_.swap(pxi_y_);
-    old_gx_.swap(wxi_x_);
-    old_gy_.swap(wxi_y_);
+    const auto ps = pair_springs(*this), ws = wall_springs(*this);
+    for (std::size_t c = 0; c < spring_count(); ++c) {
+        old_springs_[c].swap(*ps[c]);
+        old_wall_springs_[c].swap(*ws[c]);
+    }
     carry_old_.resize(n);
     for (std::size_t i = 0; i < n; ++i)
         carry_old_[i] = i < rows ? int(i) : -1;
@@ -311,18 +312,17 @@ void System::save_history() {
 }
 
 void System::restore_history() {
+    // The kept columns (spring_count) sized to the new list and zero, the others empty.
+    const auto ps = pair_springs(*this), ws = wall_springs(*this);
+    const std::size_t nc = spring_count();
+    for (std::size_t c = 0; c < ps.size(); ++c) {
+        ps[c]->assign(c < nc ? pj_.size() : 0, 0.0);
+        ws[c]->assign(c < nc ? wj_.size() : 0, 0.0);
+    }
     if (!history_) {
-        pxi_x_.clear();
-        pxi_y_.clear();
-        wxi_x_.clear();
-        wxi_y_.clear();
         carry_ = false;
         return;
     }
-    pxi_x_.assign(pj_.size(), 0.0);
-    pxi_y_.assign(pj_.size(), 0.0);
-    wxi_x_.assign(wj_.size(), 0.0);
-    wxi_y_.assign(wj_.size(), 0.0);
     if (!carry_) return;
     carry_ = false;
     const int* old = carry_old_.data();
@@ -336,8 +336,8 @@ void System::restore_history() {
             const int lo = std::min(a, b), hi = std::max(a, b);
             for (int m = old_pstart_[lo]; m < old_pstart_[lo + 1]; ++m)
                 if (old_pj_[m] == hi) {
-                    pxi_x_[k] = old_hx_[m];
-                    pxi_y_[k] = old_hy_[m];
+                    for (std::size_t c = 0; c < nc; ++c)
+                        (*ps[c])[k] = old_springs_[c][m];
                     break;
                 }
         }
@@ -345,8 +345,8 @@ void System::restore_history() {
             const int wb = wall_old_.empty() ? wj_[k] : wall_old_[wj_[k]];
             for (int m = old_wstart_[a]; m < old_wstart_[a + 1]; ++m)
                 if (old_wj_[m] == wb) {
-                    wxi_x_[k] = old_gx_[m];
-                    wxi_y_[k] = old_gy_[m];
+                    for (std::size_t c = 0; c < nc; ++c)
+                        (*ws[c])[k] = old_wall_springs_[c][m];
                     break;
                 }
         }

@@ -48,10 +48,11 @@ HOPPER_HOT_INLINE void relative_velocity(bool rot, double vix, double viy, doubl
 // Select: see contact.hpp (true in the batched passes, false in the reference pass).
 // lever_half: 0 (lever arm R) or 0.5 (R - x/2). Corr (contact corrections): the spring grows
 // with the second velocity set, and a new spring (exactly (0, 0)) only over the estimated part
-// of the step spent in contact, min(1, x / (|s_n| dt)).
+// of the step spent in contact, min(1, x / (|s_n| dt)). hx, hy: the tangential spring; hr: the
+// rolling spring's torque (law_has_rolling_spring; not read otherwise).
 template <class Law, bool Corr, bool Select>
 HOPPER_HOT_INLINE PairOutput pair_force(const ContactParams& p, double dt, double lever_half,
-                                        const PairInput& q, double& hx, double& hy) {
+                                        const PairInput& q, double& hx, double& hy, double& hr) {
     constexpr bool rot = Law::has_tangential;
     const double d = std::sqrt(q.d2);
     const double inv_d = 1.0 / d;
@@ -96,7 +97,15 @@ HOPPER_HOT_INLINE PairOutput pair_force(const ContactParams& p, double dt, doubl
     out.tj = lj * cr;
     if constexpr (law_resists_rolling<Law>) {
         // Each particle's torque changes by -t: i gets +M, j gets -M.
-        const double M = rolling_torque(p.mu_r, c.rstar, f.fn, q.wi - q.wj);
+        double M;
+        if constexpr (law_has_rolling_spring<Law>) {
+            // The spring grows with the springs' velocity set, over the tangential spring's time.
+            const double w_s = Corr ? q.swi - q.swj : q.wi - q.wj;
+            M = rolling_spring_torque(p.mu_r, p.k_t, p.gamma_t * mbar, c.rstar, f.fn, w_s,
+                                      q.wi - q.wj, dts, hr);
+        } else {
+            M = rolling_torque(p.mu_r, c.rstar, f.fn, q.wi - q.wj);
+        }
         out.ti -= M;
         out.tj += M;
     }

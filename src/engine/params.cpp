@@ -55,6 +55,10 @@ std::string to_string(TangentialLaw l) {
     return "?";
 }
 
+std::string to_string(RollingLaw l) {
+    return l == RollingLaw::constant ? "constant" : "spring";
+}
+
 double hertz_restitution(double alpha) {
     // RK4 from first contact (xi = 0, xi' = 1) until xi is back at 0; the crossing is located by
     // linear interpolation between the two steps that bracket it. A collision so damped that it
@@ -312,6 +316,14 @@ void validate_law_choices(const SceneParams& p) {
         throw ConfigError("parameter material.mu_r = " + std::to_string(m.mu_r) +
                           " needs the tangential spring of friction (material.kt_over_kn > 0 "
                           "and material.mu or walls.mu > 0): rolling resistance acts on rolling");
+    if (m.rolling_law == RollingLaw::spring && !(m.mu_r > 0.0))
+        throw ConfigError(
+            "parameter material.rolling_law = spring needs material.mu_r > 0 (the spring's cap "
+            "is mu_r R* |F_n|; it is 0)");
+    if (m.rolling_law == RollingLaw::spring && m.normal_law != NormalLaw::linear)
+        throw ConfigError(
+            "parameter material.rolling_law = spring needs material.normal_law = linear (the "
+            "rolling stiffness k_t R*^2 takes the linear law's constant k_t)");
     const TangentialLaw t = m.tangential_law;
     const bool spring_law = t == TangentialLaw::automatic || t == TangentialLaw::spring;
     if (m.mu_r > 0.0 && !spring_law)

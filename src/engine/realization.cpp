@@ -73,6 +73,7 @@ SystemConfig detail::system_config(const SceneParams& p, const DerivedConstants&
     sc.normal_law = p.material.normal_law;
     sc.tangential_law = p.material.tangential_law;
     sc.rolling = p.material.mu_r > 0.0;
+    sc.rolling_spring = sc.rolling && p.material.rolling_law == RollingLaw::spring;
     sc.particle.mu_r = sc.wall.mu_r = p.material.mu_r;
     sc.plate_decel = p.material.plate_friction * p.gravity;
     sc.plate_speed = p.material.plate_speed;

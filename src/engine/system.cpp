@@ -62,18 +62,28 @@ System::System(const SystemConfig& config) : config_(config) {
         throw core::ConfigError(
             "System: material.tangential_law = spring needs a tangential spring: k_t > 0 "
             "(material.kt_over_kn > 0; it is 0)");
-    const int law = detail::law_for(config_.normal_law, tangential, config_.rolling);
+    if (config_.rolling_spring && !config_.rolling)
+        throw core::ConfigError("System: a rolling spring needs rolling resistance (mu_r > 0)");
+    const int law =
+        detail::law_for(config_.normal_law, tangential, config_.rolling, config_.rolling_spring);
     if (law < 0) {
         std::string have;
         for (const auto& t : detail::law_traits)
             have += std::string(have.empty() ? "" : "; ") + to_string(t.normal) + " with " +
-                    to_string(t.tangential) + (t.rolling ? " and rolling resistance" : "");
-        throw core::ConfigError(
-            "System: no contact law has the normal law '" + to_string(config_.normal_law) +
-            "' with the tangential law '" + to_string(tangential) + "'" +
-            (config_.rolling ? " and rolling resistance" : "") + "; the laws are: " + have);
+                    to_string(t.tangential) +
+                    (t.rolling_spring ? " and a rolling spring"
+                     : t.rolling      ? " and rolling resistance"
+                                      : "");
+        throw core::ConfigError("System: no contact law has the normal law '" +
+                                to_string(config_.normal_law) + "' with the tangential law '" +
+                                to_string(tangential) + "'" +
+                                (config_.rolling_spring ? " and a rolling spring"
+                                 : config_.rolling      ? " and rolling resistance"
+                                                        : "") +
+                                "; the laws are: " + have);
     }
     history_ = detail::law_traits[static_cast<std::size_t>(law)].has_history;
+    rolling_history_ = detail::law_traits[static_cast<std::size_t>(law)].rolling_spring;
     kernel_ = detail::make_kernel(law, config_.scheme);
     kernel_path_ = config_.kernel == KernelPath::reference ? KernelPath::reference
                                                            : detail::resolve_kernel(config_.kernel);
@@ -220,12 +230,17 @@ void System::ensure_ready() {
     }
     // The priming evaluation only provides accelerations: it must not advance the springs
     // (the first real step grows them by v_t dt), so they are put back afterwards.
-    const std::vector<double> px = pxi_x_, py = pxi_y_, wxs = wxi_x_, wys = wxi_y_;
+    const auto ps = pair_springs(*this), ws = wall_springs(*this);
+    std::array<std::vector<double>, 3> keep_p, keep_w;
+    for (std::size_t c = 0; c < ps.size(); ++c) {
+        keep_p[c] = *ps[c];
+        keep_w[c] = *ws[c];
+    }
     const double ov = kernel_->forces(*this, false, false).max_overlap;
-    pxi_x_ = px;
-    pxi_y_ = py;
-    wxi_x_ = wxs;
-    wxi_y_ = wys;
+    for (std::size_t c = 0; c < ps.size(); ++c) {
+        *ps[c] = std::move(keep_p[c]);
+        *ws[c] = std::move(keep_w[c]);
+    }
     check_overlap(ov);
     kernel_->prime(*this);
     ready_ = true;
@@ -321,6 +336,8 @@ detail::ForceArgs System::force_args() {
     a.hy = history_ ? pxi_y_.data() : nullptr;
     a.gx = history_ ? wxi_x_.data() : nullptr;
     a.gy = history_ ? wxi_y_.data() : nullptr;
+    a.hr = rolling_history_ ? pxi_r_.data() : nullptr;
+    a.gr = rolling_history_ ? wxi_r_.data() : nullptr;
     a.wx = wx_.data();
     a.wy = wy_.data();
     a.wr = wr_.data();
@@ -350,13 +367,14 @@ detail::ForceArgs System::force_args() {
     if (batch_index_.size() < 4 * len) batch_index_.resize(4 * len);
     int* ib = batch_index_.data();
     if (kernel_path_ != KernelPath::reference) {
-        if (batch_scratch_.size() < 7 * len) batch_scratch_.resize(7 * len);
+        if (batch_scratch_.size() < 8 * len) batch_scratch_.resize(8 * len);
         double* db = batch_scratch_.data();
-        a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len, db,          db + len,
-                     db + 2 * len, db + 3 * len, db + 4 * len, db + 5 * len, db + 6 * len};
+        a.scratch = {ib,           ib + len,     ib + 2 * len, ib + 3 * len,
+                     db,           db + len,     db + 2 * len, db + 3 * len,
+                     db + 4 * len, db + 5 * len, db + 6 * len, db + 7 * len};
     } else {
         a.scratch = {ib,      ib + len, ib + 2 * len, ib + 3 * len, nullptr, nullptr,
-                     nullptr, nullptr,  nullptr,      nullptr,      nullptr};
+                     nullptr, nullptr,  nullptr,      nullptr,      nullptr, nullptr};
     }
     return a;
 }
@@ -399,6 +417,14 @@ void System::for_each_touching(Pair&& pair, Wall&& wall) const {
     }
 }
 
+namespace {
+// The energy M^2 / (2 k_r) held by a rolling spring of torque M (k_r = k_t R*^2).
+double rolling_spring_energy(double k_t, double ri, double rj, double M) {
+    const double rs = reduced_radius(ri, rj);
+    return 0.5 * M * M / (k_t * rs * rs);
+}
+}  // namespace
+
 double System::elastic_energy() const {
     if (pstart_.size() != x_.size() + 1) return 0.0;
     double e = 0.0;
@@ -408,12 +434,16 @@ double System::elastic_energy() const {
             e += 0.5 * config_.particle.k_n * ov * ov;
             if (history_)
                 e += 0.5 * config_.particle.k_t * (pxi_x_[k] * pxi_x_[k] + pxi_y_[k] * pxi_y_[k]);
+            if (rolling_history_)  // M^2 / (2 k_r), k_r = k_t R*^2
+                e += rolling_spring_energy(config_.particle.k_t, r_[i], r_[j], pxi_r_[k]);
         },
         [&](std::size_t i, int j, int k, double, double, double d2) {
             const double ov = r_[i] + wr_[j] - std::sqrt(d2);
             e += 0.5 * config_.wall.k_n * ov * ov;
             if (history_)
                 e += 0.5 * config_.wall.k_t * (wxi_x_[k] * wxi_x_[k] + wxi_y_[k] * wxi_y_[k]);
+            if (rolling_history_)
+                e += rolling_spring_energy(config_.wall.k_t, r_[i], wr_[j], wxi_r_[k]);
         });
     return e;
 }

@@ -175,6 +175,9 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
     // The tangential law named (issue 42): only off its default, automatic.
     if (p.material.tangential_law != d.material.tangential_law)
         l.add("material.tangential_law", engine::to_string(p.material.tangential_law));
+    // The rolling law (issue 39): only off its default, the constant torque.
+    if (p.material.rolling_law != d.material.rolling_law)
+        l.add("material.rolling_law", engine::to_string(p.material.rolling_law));
     return l.take();
 }
 
@@ -195,6 +198,7 @@ void context(const std::string& name, engine::SceneParams& p) {
         p.protocol.mode = engine::ProtocolMode::steady_state;
     if (name.rfind("fields.", 0) == 0 && name != "fields.enabled") p.fields.enabled = true;
     if (name == "fields.kernel_width_dlarge") p.fields.kernel = engine::FieldKernel::gaussian;
+    if (name == "material.rolling_law") p.material.mu_r = 0.05;
 }
 
 // Values to try for a row, other than the current one: within the row's range first.

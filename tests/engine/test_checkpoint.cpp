@@ -92,6 +92,8 @@ struct Case {
     // Issue 12's contact corrections and issue 13's steady state (re-insertions draw from the
     // realization's generator, which the state must carry).
     bool steady_corrected = false;
+    // Issue 39: rolling resistance as a spring (a third history column in the state).
+    bool rolling_spring = false;
 };
 
 void PrintTo(const Case& c, std::ostream* os) {
@@ -107,6 +109,10 @@ TEST_P(CheckpointResume, StoppedAtRandomStepsAndResumedEndsBitIdentical) {
         p.integrator.contact_corrections = true;
         p.protocol.mode = ProtocolMode::steady_state;
         p.protocol.jams_per_realization = 3;
+    }
+    if (c.rolling_spring) {
+        p.material.mu_r = 0.05;
+        p.material.rolling_law = RollingLaw::spring;
     }
     const RealizationResult ref = run_realization(p, c.seed);
     ASSERT_EQ(ref.status, Status::complete) << ref.message;
@@ -165,7 +171,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"gear4_fields", Scheme::gear4, true, 2},
                       Case{"verlet_fields", Scheme::verlet, true, 1},
                       Case{"gear4_steady_corrected", Scheme::gear4, false, 1, true},
-                      Case{"verlet_steady_corrected", Scheme::verlet, false, 2, true}),
+                      Case{"verlet_steady_corrected", Scheme::verlet, false, 2, true},
+                      Case{"gear4_rolling_spring", Scheme::gear4, false, 2, false, true},
+                      Case{"verlet_steady_rolling_spring", Scheme::verlet, false, 1, true, true}),
     [](const ::testing::TestParamInfo<Case>& i) { return std::string(i.param.name); });
 
 // The checkpoint format is a promise to the files users have: a state written by an earlier

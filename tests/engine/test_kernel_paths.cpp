@@ -151,6 +151,8 @@ std::vector<Case> cases() {
             SceneParams r = p;
             r.material.mu_r = 0.1;
             out.push_back({tag + ", spring friction, rolling resistance", r});
+            r.material.rolling_law = RollingLaw::spring;  // issue 39
+            out.push_back({tag + ", spring friction, rolling spring", r});
             h.material.mu_r = 0.1;
             out.push_back({tag + ", Hertz, rolling resistance", h});
         }

@@ -256,6 +256,21 @@ struct WithRolling : Base {
     static constexpr bool rolling = true;
 };
 
+// Rolling resistance as an elastic-plastic spring (issue 39; docs/model.md, "Rolling
+// resistance"): the "type C" model of Ai et al., with the rolling stiffness of Iwashita & Oda
+// (Soils Found. 38, 1998), k_r = k_t R*^2. Each contact carries the spring's torque M (a third
+// history column beside the tangential spring), which grows by -k_r (w_i - w_j) dt per step and
+// is capped at mu_r R* |F_n|: below the cap a contact resists a small rolling elastically and
+// holds a static torque without creeping, which the constant torque above cannot (it acts only
+// while the disks roll). Below the cap a dashpot damps the rolling velocity R* (w_i - w_j) as the
+// tangential dashpot damps v_t (gamma_t mbar, at the lever R*); at the cap the torque is the cap
+// alone (Ai et al.'s f = 0), so that rolling disks feel the constant torque's mu_r R* |F_n|.
+// pair_force adds it (rolling_spring_torque below). The linear normal law only (k_t constant).
+template <class Base>
+struct WithRollingSpring : WithRolling<Base> {
+    static constexpr bool rolling_spring = true;
+};
+
 // Whether a law reads ContactInput::rstar (pair_force computes it only then), and whether it
 // resists rolling.
 template <class Law>
@@ -265,6 +280,11 @@ inline constexpr bool law_needs_rstar = requires {
 template <class Law>
 inline constexpr bool law_resists_rolling = requires {
     Law::rolling;
+};
+// Whether a law's rolling resistance is the spring (a third history column per contact).
+template <class Law>
+inline constexpr bool law_has_rolling_spring = requires {
+    Law::rolling_spring;
 };
 // Whether a law has constants per pair (pair_constants(), computed at each neighbour rebuild).
 template <class Law>
@@ -282,6 +302,25 @@ HOPPER_HOT_INLINE double reduced_radius(double ri, double rj) {
 HOPPER_HOT_INLINE double rolling_torque(double mu_r, double rstar, double fn, double w_rel) {
     const double m = mu_r * rstar * std::abs(fn);
     return w_rel > 0.0 ? -m : (w_rel < 0.0 ? m : 0.0);
+}
+
+// The rolling torque on i after one step (WithRollingSpring): the spring M' = M - k_r w_s dt
+// with k_r = k_t R*^2, capped at mu_r R* |F_n| (the cap keeps M's sign: a contact rolled past
+// it slips, and rolled back it unloads elastically from the cap), plus, below the cap, the
+// dashpot -gm R*^2 w_d (gm = gamma_t mbar). w_s: the relative spin that grows the spring (the
+// springs' velocity set), w_d: the dashpots'. M is updated in place. Selects, not branches, so
+// that the batched passes vectorize.
+HOPPER_HOT_INLINE double rolling_spring_torque(double mu_r, double k_t, double gm, double rstar,
+                                               double fn, double w_s, double w_d, double dt,
+                                               double& M) {
+    const double cap = mu_r * rstar * std::abs(fn);
+    const double r2 = rstar * rstar;
+    const double m = M - k_t * r2 * w_s * dt;
+    const bool above = m > cap, below = m < -cap;
+    const double capped = above ? cap : (below ? -cap : m);
+    M = capped;
+    const double damp = above || below ? 0.0 : gm * r2 * w_d;
+    return capped - damp;
 }
 
 // The Vec2 form of a law: damping and spring velocities equal, the spring grows over dt.

@@ -56,6 +56,14 @@ enum class TangentialLaw {
                    // linear normal law, following the normal stiffness with the Hertz law)
 };
 
+// What resists the relative rolling of two touching disks when material.mu_r > 0 (docs/model.md,
+// "Rolling resistance"; issue 39).
+enum class RollingLaw {
+    constant,  // the torque mu_r R* |F_n| against w_i - w_j while they differ (issue 28; default)
+    spring,    // an elastic-plastic spring per contact, k_r = k_t R*^2, capped at mu_r R* |F_n|:
+               // holds a static torque (linear normal law only)
+};
+
 // How gamma_n follows from e_n.
 enum class NormalDamping {
     nominal,            // gamma_n = -2 ln(e_n) / tau_c (the specification; the default)
@@ -84,6 +92,7 @@ std::string to_string(LeverArm a);
 std::string to_string(NormalDamping d);
 std::string to_string(NormalLaw l);
 std::string to_string(TangentialLaw l);
+std::string to_string(RollingLaw l);
 
 struct HopperGeometry {
     double width = 43.0 * cm;           // W: total inner width between the side walls
@@ -135,6 +144,7 @@ struct MaterialParams {
     // Rolling resistance (issue 28): the coefficient of the torque mu_r R* |F_n| against the
     // relative rolling of two touching disks (particles and walls); 0 = none.
     double mu_r = 0.0;
+    RollingLaw rolling_law = RollingLaw::constant;  // the law of that resistance
     // Friction against the front and back plates of a quasi-2D cell (issue 39; docs/model.md,
     // "Plate friction"): every mobile disk feels a force of plate_friction m g against its
     // velocity, Coulomb's law with the plates' normal load a fixed fraction of the weight, made

@@ -68,8 +68,11 @@ struct SystemConfig {
     // ContactParams above. automatic: inferred from the coefficients (TangentialLaw).
     NormalLaw normal_law = NormalLaw::linear;
     TangentialLaw tangential_law = TangentialLaw::automatic;
-    // Rolling resistance (ContactParams::mu_r > 0): the registry's WithRolling variant of the law.
+    // Rolling resistance (ContactParams::mu_r > 0): the registry's WithRolling variant of the law;
+    // with rolling_spring its WithRollingSpring variant (a spring with history, capped at the
+    // constant torque; linear normal law only).
     bool rolling = false;
+    bool rolling_spring = false;
     // Plate friction (MaterialParams::plate_friction): a force of m plate_decel against each
     // mobile disk's velocity v, times |v| / plate_speed below plate_speed; 0 = none (and not a
     // flop of the step is spent on it).
@@ -220,6 +223,20 @@ class System {
         return all;
     }
 
+    // The contact history per list entry, listed once (issue 39): the tangential spring (x, y)
+    // and the rolling spring's torque, of the mobile list (pair_springs) and of the wall list
+    // (wall_springs). The first spring_count() of each are kept: none without history, the
+    // tangential spring's two, or all three with the rolling spring.
+    template <class S>
+    static auto pair_springs(S& s) {
+        return std::array{&s.pxi_x_, &s.pxi_y_, &s.pxi_r_};
+    }
+    template <class S>
+    static auto wall_springs(S& s) {
+        return std::array{&s.wxi_x_, &s.wxi_y_, &s.wxi_r_};
+    }
+    std::size_t spring_count() const { return !history_ ? 0 : rolling_history_ ? 3 : 2; }
+
     detail::ForceArgs force_args();  // the columns and scratch of a force pass
     void ensure_ready();
     // Calls pair(i, j, k, dx, dy, d2) for every touching mobile pair of the neighbour list and
@@ -244,8 +261,9 @@ class System {
     bool ready_ = false;  // forces and integrator history initialised
     bool need_rebuild_ = true;
     bool walls_changed_ = true;
-    bool history_saved_ = false;  // save_history() already ran for the coming rebuild
-    bool history_ = false;        // keep tangential springs (k_t > 0 and mu > 0)
+    bool history_saved_ = false;    // save_history() already ran for the coming rebuild
+    bool history_ = false;          // keep tangential springs (k_t > 0 and mu > 0)
+    bool rolling_history_ = false;  // and rolling springs (SystemConfig::rolling_spring)
     int next_id_ = 0;
     // StepFusion::step (docs/performance.md): the last step's corrector also computed the
     // largest squared displacement the next predictor will give (ahead_d2_); while nothing else
@@ -275,6 +293,7 @@ class System {
     // Neighbour list (half list, CSR by mobile index): mobile-mobile and mobile-wall.
     std::vector<int> pstart_, pj_, wstart_, wj_;
     std::vector<double> pxi_x_, pxi_y_, wxi_x_, wxi_y_;  // tangential springs (if history_)
+    std::vector<double> pxi_r_, wxi_r_;  // rolling springs' torques (if rolling_history_)
     // Reduced mass per list entry, 1 / (1/m_i + 1/m_j) (walls: 1 / (1/m_i)): a per-pair constant
     // set at each rebuild, so that the force pass divides less.
     std::vector<double> pmbar_, wmbar_;
@@ -301,7 +320,7 @@ class System {
     // a checkpoint.
     bool carry_ = false;
     std::vector<int> old_pstart_, old_pj_, old_wstart_, old_wj_, carry_old_, wall_old_;
-    std::vector<double> old_hx_, old_hy_, old_gx_, old_gy_;
+    std::array<std::vector<double>, 3> old_springs_, old_wall_springs_;
     std::vector<double> scratch_;
     std::vector<int> iscratch_;
     // Second velocity set when contact_corrections is on: verlet, velocities extrapolated to the
