@@ -132,6 +132,8 @@ INSTANTIATE_TEST_SUITE_P(BothSchemes, Incline, ::testing::Values(Scheme::verlet,
 struct Material {
     const char* name;
     double tau_c, e_n, mu;
+    double mu_r = 0.0;            // rolling resistance (issue 39), with
+    bool rolling_spring = false;  // its law: the constant torque or the spring
 };
 
 // The campaign's contact constants for collision time tau (k_n from two large disks, as
@@ -143,6 +145,7 @@ ContactParams campaign_contact(const Material& m) {
     p.k_t = 0.8 * p.k_n;
     p.gamma_t = 0.5 * p.gamma_n;
     p.mu = m.mu;
+    p.mu_r = m.mu_r;
     return p;
 }
 
@@ -157,6 +160,8 @@ ArchRun arch_over_gap(const Material& mat) {
     const ContactParams cp = campaign_contact(mat);
     SystemConfig c = system_config(Scheme::verlet, 75.0, cp, cp);
     c.dt = mat.tau_c / 75.0;
+    c.rolling = mat.mu_r > 0.0;
+    c.rolling_spring = mat.rolling_spring;
     System s(c);
     const double d = d_large, gap = 2.5 * d, half_w = 6.0 * d;
     // Floor: touching wall disks from the edge disks (centres at +-(gap/2 + d/2)) outwards.
@@ -222,7 +227,10 @@ TEST_P(Arch, ALoadedArchOverAGapHoldsWithoutCreep) {
 
 INSTANTIATE_TEST_SUITE_P(Campaigns, Arch,
                          ::testing::Values(Material{"silo", 7.3e-4, 0.2, 0.5},
-                                           Material{"hopper_calibrated", 8.0e-4, 0.5, 0.8}),
+                                           Material{"hopper_calibrated", 8.0e-4, 0.5, 0.8},
+                                           // issue 39: the silo with the rolling spring
+                                           Material{"silo_rolling_spring", 7.3e-4, 0.2, 0.5, 0.05,
+                                                    true}),
                          [](const auto& p) { return std::string(p.param.name); });
 
 }  // namespace
