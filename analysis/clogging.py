@@ -25,6 +25,13 @@ usage:
       2 with the given probability under either law, the jams each law expects there, the
       core-hours at the store's measured cost per flowing second, and what the store already
       holds there (default outlets: the ten beyond the largest one with a jam)
+  clogging.py published STORE.h5 [STORE.h5 ...] [--json OUT] [--md OUT]
+      the jam rate per flowing second of each point at theta = 45 deg and a published outlet
+      (D = 2.7-3.5 cm) against the published study's (its Table 3's jams over 40 fills of its
+      mean empty time; issue 39, part 5): jams, flowing time, rate, the published rate, their
+      ratio, the jams the published rate expects in that flowing time and the two-sided Poisson
+      p of the count; then per store the combined test (Poisson deviance against chi-square with
+      one degree of freedom per outlet)
   clogging.py heads PUBLISHED.h5 STEADY.h5 [--ns-per-particle-step LABEL=NS ...] [--json OUT]
       per point of both stores: jams, tau [95 % CI], <s> +- se, particle-steps per jam (the
       work, independent of the machine's load) and, where a point's CPU cost per particle-step
@@ -380,6 +387,84 @@ def question_summary(s, path):
                           for _, row in table.iterrows()]
     return {"store": path, "points": rows, "fits": fits, "poisson_fit": poisson_fits(rows),
             "core_hours": sum(row["core_hours"] for row in rows)}
+
+
+# The published study's jams at theta = 45 deg over 40 fills (its Table 3) and its mean empty
+# times there (calibration.PUBLISHED_EMPTY, issue 24: restarts included, shaking excluded): the
+# published jam rate per flowing second is jams / (fills x empty time).
+PUBLISHED_JAMS_45 = {2.7: 261, 2.9: 124, 3.1: 48, 3.3: 26, 3.5: 8}
+PUBLISHED_FILLS = 40
+PUBLISHED_EMPTY_45 = {2.7: 34.45, 2.9: 30.44, 3.1: 27.83, 3.3: 25.25, 3.5: 22.82}
+
+
+def poisson_two_sided(n, mu):
+    """Two-sided p of a count n under Poisson(mu): twice the smaller tail, at most 1."""
+    return float(min(1.0, 2.0 * min(stats.poisson.cdf(n, mu), stats.poisson.sf(n - 1, mu))))
+
+
+def poisson_deviance(n, mu):
+    """2 [n ln(n/mu) - (n - mu)] (0 ln 0 = 0): one outlet's share of the combined test."""
+    return 2.0 * ((n * math.log(n / mu) if n > 0 else 0.0) - (n - mu))
+
+
+def published_summary(s, path):
+    """Per point of an open store at theta = 45 deg and a published outlet: its jams and flowing
+    time (question_summary's) against the published rate; and the combined test over them."""
+    q = question_summary(s, path)
+    theta = {str(pt["label"]): float(pt["theta_deg"]) if "theta_deg" in pt else None
+             for _, pt in s.points.iterrows()}
+    rows, dev = [], 0.0
+    for r in q["points"]:
+        D = round(r["D_cm"], 3)
+        th = theta.get(r["label"])
+        if D not in PUBLISHED_JAMS_45 or th is None or abs(th - 45.0) > 1e-6:
+            continue
+        if not r["flow_time"] > 0:  # nothing stored there yet
+            continue
+        n, T = int(r["tau"]["jams"]), float(r["flow_time"])
+        rate_pub = PUBLISHED_JAMS_45[D] / (PUBLISHED_FILLS * PUBLISHED_EMPTY_45[D])
+        mu = rate_pub * T
+        row = {"label": r["label"], "D_cm": D, "realizations": r["realizations"], "jams": n,
+               "flow_time": T, "rate": n / T if T > 0 else None, "published_rate": rate_pub,
+               "expected": mu, "ratio": n / mu if mu > 0 else None,
+               "p": poisson_two_sided(n, mu) if mu > 0 else None}
+        if mu > 0:
+            dev += poisson_deviance(n, mu)
+        rows.append(row)
+    k = sum(1 for r in rows if r["expected"] > 0)
+    combined = {"outlets": k, "deviance": dev,
+                "p": float(stats.chi2.sf(dev, k)) if k else None}
+    return {"store": path, "points": rows, "combined": combined}
+
+
+def opt(x):
+    return "-" if x is None else sig(x)
+
+
+def published_markdown(results):
+    lines = ["| store | D (cm) | realizations | jams | flowing time (s) | rate (1/s) | "
+             "published rate (1/s) | ratio | published rate expects | Poisson p |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for res in results:
+        for r in res["points"]:
+            lines.append("| %s | %.1f | %d | %d | %.0f | %s | %.4g | %s | %.1f | %s |" % (
+                os.path.basename(res["store"]), r["D_cm"], r["realizations"], r["jams"],
+                r["flow_time"], opt(r["rate"]), r["published_rate"], opt(r["ratio"]),
+                r["expected"], opt(r["p"])))
+    lines.append("")
+    for res in results:
+        c = res["combined"]
+        lines.append("%s: combined over %d outlets, Poisson deviance %.2f, p = %s" % (
+            os.path.basename(res["store"]), c["outlets"], c["deviance"], opt(c["p"])))
+    return "\n".join(lines) + "\n"
+
+
+def published(paths, out, md):
+    results = []
+    for path in paths:
+        with open_store(path) as s:
+            results.append(published_summary(s, path))
+    emit(results, published_markdown(results), out, md)
 
 
 def _poisson_glm(X, n, T):
@@ -739,6 +824,10 @@ def main():
     q.add_argument("--json")
     q.add_argument("--md", help="write the table as Markdown too")
     q.add_argument("--png", help="draw the jam rate with the Poisson fits (matplotlib)")
+    pb = sub.add_parser("published")
+    pb.add_argument("stores", nargs="+")
+    pb.add_argument("--json")
+    pb.add_argument("--md", help="write the table as Markdown too")
     pl = sub.add_parser("plan")
     pl.add_argument("store")
     pl.add_argument("--outlets", help="outlets D in cm, comma-separated (default: the ten "
@@ -756,11 +845,14 @@ def main():
     pl.add_argument("--json")
     pl.add_argument("--md", help="write the table as Markdown too")
     args = ap.parse_args()
-    for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)]:
+    for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)] + \
+            list(getattr(args, "stores", [])):
         if not os.path.exists(p):
             sys.exit("clogging.py: no such store: %s" % p)
     if args.cmd == "arrests":
         arrests(args.store, args.json)
+    elif args.cmd == "published":
+        published(args.stores, args.json, args.md)
     elif args.cmd == "question":
         question(args.store, args.json, args.md, args.png)
     elif args.cmd == "plan":

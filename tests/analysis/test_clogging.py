@@ -219,4 +219,41 @@ check(pf5["pow_Dc"] == 0.05 and pf5.get("pow_Dc_fixed") and "D_c fixed at 5 cm" 
       "power law at a fixed D_c: %s" % pf5)
 check("reason" in clogging.poisson_fits(with_zero, dc_fixed_m=0.03), "D_c below a jamming outlet")
 
+# published (issue 39, part 5): against the published study's jam rate at theta = 45 deg. Point 0
+# (D = 2.7 cm): 10 jams in 100 s; the published rate is 261 / (40 x 34.45 s) = 0.189405 /s, so
+# 18.9405 expected, ratio 0.52797, p = 2 P(X <= 10) under Poisson(18.9405) (summed here by
+# hand). Point 1 (D = 3.5 cm): 1 jam in 50 s against 8 / (40 x 22.82) x 50 = 0.438212 expected,
+# p = 2 (1 - e^-0.438212).
+# Point 2 (D = 3.1 cm at theta 60) and point 3 (D = 4.0 cm) are not published rows: left out.
+# Combined: the two deviances 2 [n ln(n/mu) - (n - mu)] against chi-square with 2 degrees.
+pub_store = Store.from_frames("published", {
+    "points": pd.DataFrame({"label": ["a", "b", "c", "d"], "D_cm": [2.7, 3.5, 3.1, 4.0],
+                            "theta_deg": [45.0, 45.0, 60.0, 45.0]}),
+    "realizations": pd.DataFrame({"point": [0, 1, 2, 3], "realization": [0, 0, 0, 0],
+                                  "status": ["complete"] * 4, "task_seconds": [1.0] * 4}),
+    "survival": pd.DataFrame({"point": [0] * 11 + [1, 1, 2, 3],
+                              "realization": [0] * 15,
+                              "interval": list(range(11)) + [0, 1, 0, 0],
+                              "duration": [9.0] * 10 + [10.0] + [20.0, 30.0, 40.0, 50.0],
+                              "event": [1] * 10 + [0] + [1, 0, 1, 1]}),
+    "analysis": pd.DataFrame(), "jam_rate": pd.DataFrame(), "avalanche": pd.DataFrame()})
+pb = clogging.published_summary(pub_store, "synthetic")
+check([r["D_cm"] for r in pb["points"]] == [2.7, 3.5], "published rows: %s" % pb["points"])
+a, b = pb["points"]
+mu = 261 / (40 * 34.45) * 100
+cdf = sum(math.exp(-mu) * mu ** k / math.factorial(k) for k in range(11))
+check(a["jams"] == 10 and abs(a["flow_time"] - 100) < 1e-12 and abs(a["expected"] - mu) < 1e-9
+      and abs(a["ratio"] - 10 / mu) < 1e-12 and abs(a["p"] - 2 * cdf) < 1e-9,
+      "2.7 cm: %s (p by hand %.6g)" % (a, 2 * cdf))
+mu_b = 8 / (40 * 22.82) * 50
+# one jam where 0.44 are expected: the upper tail P(X >= 1) = 1 - e^-mu is the smaller one
+check(b["jams"] == 1 and abs(b["expected"] - mu_b) < 1e-12
+      and abs(b["p"] - 2 * (1 - math.exp(-mu_b))) < 1e-12, "3.5 cm: %s" % b)
+dev = 2 * (10 * math.log(10 / mu) - (10 - mu)) + 2 * (math.log(1 / mu_b) - (1 - mu_b))
+check(pb["combined"]["outlets"] == 2 and abs(pb["combined"]["deviance"] - dev) < 1e-9
+      and abs(pb["combined"]["p"] - math.exp(-dev / 2)) < 1e-12,
+      "combined: %s (deviance by hand %.6g)" % (pb["combined"], dev))
+check("| synthetic | 2.7 | 1 | 10 | 100 |" in clogging.published_markdown([pb]),
+      "published markdown:\n%s" % clogging.published_markdown([pb]))
+
 check.finish()
