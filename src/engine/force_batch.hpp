@@ -49,7 +49,7 @@ struct ForceArgs {
     // Scratch for one block: flags per list entry (batched paths), then per touching entry (the
     // indices on every path; the law's results on the batched paths, null on the reference).
     struct Scratch {
-        int *flag, *entry, *owner, *partner;       // touch flags; touching entries, particles
+        int *flag, *entry, *owner, *partner;            // touch flags; touching entries, particles
         double *fx, *fy, *ti, *tj, *sx, *sy, *ov, *sr;  // per touching entry
     } scratch;
 };
