@@ -275,13 +275,14 @@ void accumulate(const ForceArgs& a, int i0, int m, double* __restrict fxi, doubl
     const double* __restrict ssx = a.scratch.sx;
     const double* __restrict ssy = a.scratch.sy;
     const double* __restrict ssr = a.scratch.sr;
+    constexpr bool rhist = law_has_rolling_spring<Law>;
     for (int t = 0; t < m; ++t) {
         c.add(owner[t] - i0, partner[t], sfx[t], sfy[t], sti[t], stj[t], fxi, fyi, tqi);
         if constexpr (Law::has_history) {
             c.hx[entry[t]] = ssx[t];
             c.hy[entry[t]] = ssy[t];
         }
-        if constexpr (law_has_rolling_spring<Law>) c.hr[entry[t]] = ssr[t];
+        if constexpr (rhist) c.hr[entry[t]] = ssr[t];
     }
 }
 
@@ -294,6 +295,7 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
                                   double* __restrict tqi) {
     constexpr bool rot = Law::has_tangential;
     constexpr bool hist = Law::has_history;
+    constexpr bool rhist = law_has_rolling_spring<Law>;
     const PairColumns<Law, Wall> c(a);
     const int* __restrict entry = a.scratch.entry;
     const int* __restrict owner = a.scratch.owner;
@@ -306,7 +308,7 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
             const PairInput q = c.template input<Corr>(k, i, j);
             double& sx = hist ? c.hx[k] : no_spring_x;
             double& sy = hist ? c.hy[k] : no_spring_y;
-            double& sr = law_has_rolling_spring<Law> ? c.hr[k] : no_spring_r;
+            double& sr = rhist ? c.hr[k] : no_spring_r;
             const PairOutput o =
                 pair_force<Law, Corr, false>(c.p, c.dt, c.lever_half, q, sx, sy, sr);
             c.add(i - i0, j, o.fx, o.fy, o.ti, o.tj, fxi, fyi, tqi);
@@ -333,7 +335,7 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
                 sx = c.hx[k];
                 sy = c.hy[k];
             }
-            if constexpr (law_has_rolling_spring<Law>) sr = c.hr[k];
+            if constexpr (rhist) sr = c.hr[k];
             const PairOutput o =
                 pair_force<Law, Corr, true>(c.p, c.dt, c.lever_half, q, sx, sy, sr);
             ofx[t] = o.fx;
@@ -346,7 +348,7 @@ HOPPER_FORCE_PASS double evaluate(const ForceArgs& a, int m, int i0, double max_
                 osx[t] = sx;
                 osy[t] = sy;
             }
-            if constexpr (law_has_rolling_spring<Law>) osr[t] = sr;
+            if constexpr (rhist) osr[t] = sr;
             oov[t] = o.overlap;
         }
         // The largest overlap, in a loop of its own (a floating-point max reduction would keep

@@ -67,20 +67,17 @@ System::System(const SystemConfig& config) : config_(config) {
     const int law =
         detail::law_for(config_.normal_law, tangential, config_.rolling, config_.rolling_spring);
     if (law < 0) {
+        const auto rolling_text = [](bool rolling, bool spring) {
+            return spring ? " and a rolling spring" : rolling ? " and rolling resistance" : "";
+        };
         std::string have;
         for (const auto& t : detail::law_traits)
             have += std::string(have.empty() ? "" : "; ") + to_string(t.normal) + " with " +
-                    to_string(t.tangential) +
-                    (t.rolling_spring ? " and a rolling spring"
-                     : t.rolling      ? " and rolling resistance"
-                                      : "");
-        throw core::ConfigError("System: no contact law has the normal law '" +
-                                to_string(config_.normal_law) + "' with the tangential law '" +
-                                to_string(tangential) + "'" +
-                                (config_.rolling_spring ? " and a rolling spring"
-                                 : config_.rolling      ? " and rolling resistance"
-                                                        : "") +
-                                "; the laws are: " + have);
+                    to_string(t.tangential) + rolling_text(t.rolling, t.rolling_spring);
+        throw core::ConfigError(
+            "System: no contact law has the normal law '" + to_string(config_.normal_law) +
+            "' with the tangential law '" + to_string(tangential) + "'" +
+            rolling_text(config_.rolling, config_.rolling_spring) + "; the laws are: " + have);
     }
     history_ = detail::law_traits[static_cast<std::size_t>(law)].has_history;
     rolling_history_ = detail::law_traits[static_cast<std::size_t>(law)].rolling_spring;
