@@ -236,6 +236,18 @@ int run_command(const std::vector<std::string>& args, const std::string& command
             };
         }
     }
+    // Test hook (not for users): HOPPER_STORE_STOP=result:<n> makes the store raise SIGSTOP once
+    // the n-th result of the run is durable (tests act on the run frozen there; see store.hpp).
+    if (const char* stop = std::getenv("HOPPER_STORE_STOP")) {
+        const std::string c = stop;
+        const std::string prefix = "result:";
+        if (c.rfind(prefix, 0) != 0)
+            throw core::ConfigError("HOPPER_STORE_STOP must be result:<n>, got '" + c + "'");
+        const std::uint64_t n = parse_seed("HOPPER_STORE_STOP", c.substr(prefix.size()));
+        if (n < 1 || n > 1000000)
+            throw core::ConfigError("HOPPER_STORE_STOP's n must be 1 to 1000000, got '" + c + "'");
+        opt.store_options.stop_after_results = static_cast<int>(n);
+    }
     // Test hook (not for users): HOPPER_STORE_PAUSE=journal_link:<ms> pauses a run that creates
     // a new store's journal before linking it into place (the race of two runs on a new store).
     if (const char* pause = std::getenv("HOPPER_STORE_PAUSE")) {

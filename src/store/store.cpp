@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <fstream>
@@ -111,6 +112,7 @@ struct Store::Impl {
     std::chrono::steady_clock::time_point last_flush{};
     bool run_open = false;
     int crash_passes = 0;
+    int results_stored = 0;  // results of this process's runs made durable (the stop hook)
     // A batch (begin_batch .. commit): records written to the journal, not yet synced; their
     // HDF5 view updates wait for the sync.
     bool batch_open = false;
@@ -129,6 +131,16 @@ struct Store::Impl {
     // Test hook: SIGKILL the n-th time `point` is passed.
     void crash_point(const char* point) {
         if (opt.crash_point == point && ++crash_passes == opt.crash_after) ::raise(SIGKILL);
+    }
+
+    // Test hook: SIGSTOP once the stop_after_results-th result is durable (journal synced, view
+    // updated), so that a test finds the run in a known state however loaded the machine is.
+    void results_durable(int n) {
+        const bool reached = opt.stop_after_results > 0 &&
+                             results_stored < opt.stop_after_results &&
+                             results_stored + n >= opt.stop_after_results;
+        results_stored += n;
+        if (reached) ::raise(SIGSTOP);
     }
 
     void rebuild() {
@@ -363,6 +375,7 @@ void Store::append(const ResultRecord& r) {
         if (row >= 0) m.writer->result(m.state, m.state.find_point(r.label), row, r, res);
         m.maybe_flush();
     });
+    m.results_durable(1);
 }
 
 void Store::begin_batch() {
@@ -389,6 +402,8 @@ void Store::commit() {
         }
         m.maybe_flush();
     });
+    m.results_durable(static_cast<int>(std::count_if(
+        pending.begin(), pending.end(), [](const Impl::Pending& p) { return p.row >= 0; })));
 }
 
 void Store::allot(const AllotmentRecord& r) {

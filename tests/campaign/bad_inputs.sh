@@ -21,6 +21,11 @@ run_expect 2 usage "$EXE" run
 expect_in usage.err "missing the sweep file"
 run_expect 2 bad_grace "$EXE" run mini.toml --grace -1
 expect_in bad_grace.err "--grace must be >= 0"
+# The test hooks' variables (tests only) name what they accept too.
+HOPPER_STORE_STOP=results:2 run_expect 2 bad_stop "$EXE" run mini.toml --store "$WORK/stop.h5"
+expect_in bad_stop.err "HOPPER_STORE_STOP must be result:<n>, got 'results:2'"
+HOPPER_STORE_STOP=result:0 run_expect 2 zero_stop "$EXE" run mini.toml --store "$WORK/stop.h5"
+expect_in zero_stop.err "HOPPER_STORE_STOP's n must be 1 to 1000000, got 'result:0'"
 
 # A foreign file where the store should be.
 echo "not a store" >foreign.h5

@@ -38,8 +38,9 @@ same_digests "$WORK/ref.digest" mem.digest
 
 # 2. The master stopped while the workers run.
 START=$SECONDS
-start_job mpirun -np 3 "$EXE" run "$MINI" --store stop.h5 --progress-interval 0 --worker-timeout 1
-freeze_when stop.h5 "s['done'] >= 1 and s['done'] <= 9" "the first realizations stored" # frozen now
+start_job env HOPPER_STORE_STOP=result:1 \
+    mpirun -np 3 "$EXE" run "$MINI" --store stop.h5 --progress-interval 0 --worker-timeout 1
+freeze_at_stop stop.h5 "s['done'] == 1" "the first realization stored" # the master stopped itself
 MASTER=""
 for p in $FROZEN; do
     grep -qz '^OMPI_COMM_WORLD_RANK=0$' /proc/"$p"/environ 2>/dev/null && MASTER=$p

@@ -165,6 +165,29 @@ freeze_when() {
         sleep "$SLICE"
     done
 }
+# freeze_at_stop STORE COND WHAT: for a job whose run stops itself in a known state (started with
+# `env HOPPER_STORE_STOP=result:<n>`: the store raises SIGSTOP once the run's n-th result is
+# durable), waits until it has, freezes the rest of the job as freeze_job does, and fails naming
+# WHAT unless the status then satisfies COND. Where the state to act on is "so many stored, the
+# rest not yet handed out", this is the way: that state is the run's own, not one that a look
+# happened to catch, so no load can make the run end before it (freeze_when's slices bound the
+# job's progress per look only as well as the loaded test shell keeps to its sleeps: on a
+# 0.6 s mini.toml run under the full suite at -j2, campaign.mpi_hybrid once missed it).
+freeze_at_stop() {
+    wait_until "$3: the run stopping itself (HOPPER_STORE_STOP)" self_stopped
+    freeze_job
+    status_has "$1" "$2" || { "$EXE" status "$1" --json >&2; fail "$3: not so where the run stopped itself"; }
+}
+self_stopped() {  # a campaign process of the job is stopped; fails the test if the job ended
+    job_alive || fail "the run ended before it stopped itself (HOPPER_STORE_STOP)"
+    local p line st
+    for p in $(pgrep -s "$JOB" -x campaign); do
+        line=$(cat /proc/"$p"/stat 2>/dev/null) || continue
+        st=${line##*) }
+        [ "${st%% *}" = T ] && return 0
+    done
+    return 1
+}
 # pending_signal PID SIG: PID has SIG (a number) pending (stopped processes keep it so).
 pending_signal() {
     local mask

@@ -13,12 +13,12 @@ csv_rows() {
     echo $(($(wc -l <"$1/realizations.csv") - 1))
 }
 
-start_job "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --threads 1
+start_job env HOPPER_STORE_STOP=result:3 "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --threads 1
 trap thaw_job EXIT  # a failed check must not leave the writer frozen
-# Freeze the writer mid-run (its journal locked, its HDF5 file open for writing): what is
-# stored at the moment of reading is then fixed. Frozen once 3 are stored and some are still to
-# run (read with it frozen, lib.sh): it holds the store during the reads however fast it runs.
-freeze_when "$STORE" "s['done'] >= 3 and s['pending'] > 0" "3 realizations stored, more to run"
+# The writer frozen mid-run (its journal locked, its HDF5 file open for writing): what is
+# stored at the moment of reading is then fixed. It stops itself once 3 are stored (lib.sh's
+# freeze_at_stop), 9 still to run: it holds the store during the reads however fast it runs.
+freeze_at_stop "$STORE" "s['done'] == 3 and s['pending'] > 0" "3 realizations stored, more to run"
 stored=$(done_now)
 "$EXE" status "$STORE" --json | "$PY" -c 'import json,sys; sys.exit(0 if json.load(sys.stdin)["active"] else 1)' ||
     fail "the writer is not holding the store"

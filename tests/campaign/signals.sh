@@ -14,15 +14,16 @@ else
     CMD=(mpirun -np "$NP" "$EXE" run "$MINI" --store "$STORE" --progress-interval 0 --grace 30)
 fi
 
-# Each signal is sent with the job frozen (freeze_when, lib.sh) in the state the assertions need:
-# something stored, and at least 2 realizations not yet handed out (more than the one dispatch a
-# worker's result could still get before the master sees the signal), so that the run cannot
-# end complete before the signal, however fast the machine or slow the test's polls.
+# Each signal is sent with the job frozen in the state the assertions need: something stored,
+# and at least 2 realizations not yet handed out (more than the one dispatch a worker's result
+# could still get before the master sees the signal), so that the run cannot end complete before
+# the signal, however fast the machine or slow the test's polls. The run stops itself there
+# (HOPPER_STORE_STOP=result:1: SIGSTOP once its first result is durable; lib.sh's freeze_at_stop).
 NOT_HANDED_OUT="s['pending'] - len(s['running']) >= 2"
 
 # 1. SIGTERM: stop now, once the run is under way.
-start_job "${CMD[@]}"
-freeze_when "$STORE" "s['done'] >= 1 and $NOT_HANDED_OUT" "a realization stored, 2 not handed out"
+start_job env HOPPER_STORE_STOP=result:1 "${CMD[@]}"
+freeze_at_stop "$STORE" "s['done'] == 1 and $NOT_HANDED_OUT" "a realization stored, 2 not handed out"
 kill -TERM $FROZEN  # every rank, as Slurm does at the time limit
 thaw_job
 wait "$JOB"
@@ -48,9 +49,9 @@ PY
 
 # 2. SIGUSR1: drain (running realizations finish within the grace time).
 : >job.err
-start_job "${CMD[@]}"
 before=$("$EXE" status "$STORE" --json | "$PY" -c 'import json,sys; print(json.load(sys.stdin)["done"])')
-freeze_when "$STORE" "s['done'] >= $((before + 1)) and $NOT_HANDED_OUT" \
+start_job env HOPPER_STORE_STOP=result:1 "${CMD[@]}"
+freeze_at_stop "$STORE" "s['done'] == $((before + 1)) and $NOT_HANDED_OUT" \
     "one more realization stored, 2 not handed out"
 if [ "$NP" -eq 0 ]; then kill -USR1 "$JOB"; else kill -USR1 $(pgrep -s "$JOB" -x mpirun); fi
 # mpirun forwards the signal to the (frozen) ranks: they continue once every one has it pending.

@@ -204,6 +204,10 @@ struct StoreOptions {
     // rebuilt file is renamed into place), "close" (HDF5 closed, sync record not yet written).
     std::string crash_point;
     int crash_after = 0;
+    // Test hook: raise SIGSTOP once this many results of this process's runs are durable (the
+    // journal synced and the HDF5 view updated); 0: never. A test then acts on a run frozen in
+    // a known state (so many stored, the rest not yet handed out) instead of racing it.
+    int stop_after_results = 0;
     // False: a file system without locks is accepted (with a note) instead of refused; nothing
     // then keeps two runs from writing the store at once (`campaign run --no-file-locking`).
     bool require_lock = true;
