@@ -352,11 +352,9 @@ struct Decoder {
 }  // namespace
 
 void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
-    const bool science = !r.avalanche_sizes.empty() || !r.arches.empty();
-    const std::uint16_t version = !r.diagnostics.force_path.empty() ? result_codec_version
-                                  : science                         ? result_codec_version_science
-                                  : r.fields                        ? result_codec_version_fields
-                                             : result_codec_version_without_fields;
+    // The version follows from the members the result holds (engine::result_version): a result
+    // without the later members keeps the bytes it had before they existed.
+    const std::uint16_t version = engine::result_version(r);
     w.u32(result_magic);
     w.u8(static_cast<std::uint8_t>(version & 0xff));
     w.u8(static_cast<std::uint8_t>(version >> 8));

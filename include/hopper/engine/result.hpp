@@ -2,12 +2,15 @@
 // What one realization reports (docs/model.md, "What each realization reports").
 // Times are seconds of discharge time (shaking excluded) unless stated otherwise.
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "hopper/engine/arch.hpp"
+#include "hopper/engine/field_def.hpp"
 #include "hopper/engine/fields.hpp"
 
 namespace hopper::engine {
@@ -97,5 +100,148 @@ struct RealizationResult {
     // Coarse-grained fields of the discharge; present only when SceneParams::fields.enabled.
     std::optional<FieldMoments> fields;
 };
+
+// ---------------------------------------------------------------------------------------------
+// The result described once (field_def.hpp): every member of RealizationResult, its Diagnostics
+// and Event with its name, units and description, in the journal's byte order, which must not
+// change: a member added later goes at the end with `since` the next result format version
+// (result_version below says which version a result needs). A new per-jam observable is a
+// member above, one line here, and the protocol that fills it.
+
+// Calls v(def) for every member of Diagnostics, in declaration order.
+template <class V>
+constexpr void for_each_diagnostic(V&& v) {
+    using D = Diagnostics;
+    v(field("steps", &D::steps, "1", "time steps (settle + discharge + shaking)"));
+    v(field("settle_steps", &D::settle_steps, "1", "time steps while settling"));
+    v(field("neighbor_rebuilds", &D::neighbor_rebuilds, "1", "neighbour list rebuilds"));
+    v(placed(field("particle_steps", &D::particle_steps, "1",
+                   "sum over steps of the mobile particles integrated"),
+             Placement::nowhere));
+    v(field("settle_time", &D::settle_time, "s", "simulated time spent settling"));
+    v(field("shake_time", &D::shake_time, "s", "simulated time spent shaking"));
+    v(timed(field("wall_seconds", &D::wall_seconds, "s",
+                  "wall-clock time of the realization (not reproducible)")));
+    v(timed(field("ns_per_particle_step", &D::ns_per_particle_step, "ns",
+                  "wall-clock cost per particle and step")));
+    v(field("max_overlap_ratio", &D::max_overlap_ratio, "d_small",
+            "largest overlap seen / d_small"));
+    v(field("settled_kinetic_energy", &D::settled_kinetic_energy, "J",
+            "mean kinetic energy per particle when settled"));
+    v(field("potential_energy_released", &D::potential_energy_released, "J",
+            "m g dy of all particles, fill to end"));
+    v(field("dt", &D::dt, "s", "time step"));
+    v(field("tau_c", &D::tau_c, "s", "contact duration used"));
+    v(field("k_n", &D::k_n, "N/m", "normal spring constant"));
+    v(timed(field("seconds_forces", &D::seconds_forces, "s", "wall-clock time in force loops")));
+    v(timed(
+        field("seconds_integration", &D::seconds_integration, "s", "wall-clock time integrating")));
+    v(timed(field("seconds_neighbors", &D::seconds_neighbors, "s",
+                  "wall-clock time in neighbour search")));
+    v(timed(
+        field("seconds_observers", &D::seconds_observers, "s", "wall-clock time in observers")));
+    // Issue 12: which machine-dependent code ran, like the timings above (the bits do not depend
+    // on it), so it is left out of the physics digest.
+    v(timed(since(field("force_path", &D::force_path, "",
+                        "force pass that ran: reference, baseline, avx2 or avx512 (same bits)"),
+                  4)));
+}
+
+// Calls v(def) for every member of an Event, in declaration order (the store's columns are
+// event_<name>).
+template <class V>
+constexpr void for_each_event_field(V&& v) {
+    using E = Event;
+    v(field("kind", &E::kind, "1", "event log: what happened"));
+    v(field("time", &E::time, "s", "event log: discharge time (shaking excluded)"));
+    v(field("sim_time", &E::sim_time, "s", "event log: simulated time since the fill"));
+    v(field("in_hopper", &E::in_hopper, "1", "event log: particles left in the hopper"));
+}
+
+// Calls v(def) for every member of RealizationResult, in the journal's order.
+template <class V>
+constexpr void for_each_result_field(V&& v) {
+    using R = RealizationResult;
+    v(field("status", &R::status, "1", "how the realization ended"));
+    v(field("message", &R::message, "", "the engine's message (the reason when failed)"));
+    v(placed(field("seed", &R::seed, "1", "random seed of the realization"), Placement::record));
+    v(field("particles", &R::particles, "1", "N at the fill"));
+    v(field("wall_particles", &R::wall_particles, "1", "immobile wall particles"));
+    v(in(field("survival_times", &R::survival_times, "s",
+               "survival intervals in order (discharge time)"),
+         Family::survival));
+    v(in(field("censored", &R::censored, "1", "whether each survival interval is right-censored"),
+         Family::survival));
+    v(in(field("jam_onsets", &R::jam_onsets, "s", "discharge time of each jam's onset"),
+         Family::jam));
+    v(in(field("shakes_per_jam", &R::shakes_per_jam, "1", "shakes used on each jam"), Family::jam));
+    v(field("n_jams", &R::n_jams, "1", "jams"));
+    v(field("n_shakes", &R::n_shakes, "1", "shakes"));
+    v(field("n_jams_multi_shake", &R::n_jams_multi_shake, "1",
+            "jams that needed more than one shake"));
+    v(field("empty_time", &R::empty_time, "s",
+            "discharge time until the hopper was empty (shaking excluded); 0 when "
+            "has_empty_time is false"));
+    v(field("discharge_rate", &R::discharge_rate, "1/s",
+            "particles per second over the steady part; 0 when has_discharge_rate is false"));
+    v(field("discharge_rate_mass", &R::discharge_rate_mass, "kg/s",
+            "mass discharge rate over the steady part (0: none)"));
+    v(field("discharged", &R::discharged, "1", "particles that left the hopper"));
+    v(in(field("exit_times", &R::exit_times, "s", "discharge time at which each particle left"),
+         Family::exit));
+    v(in(field("curve_time", &R::curve_time, "s", "discharge curve: sample times (discharge time)"),
+         Family::curve));
+    v(in(field("curve_count", &R::curve_count, "1", "discharge curve: particles in the hopper"),
+         Family::curve, "curve_in_hopper"));
+    v(in(field("events", &R::events, "1", "event log"), Family::event));
+    v(field("diagnostics", &R::diagnostics, "", "engine diagnostics"));
+    // Issue 7: journaled from version 2 on, when present; the store file has /fields/<row>.
+    v(placed(since(field("fields", &R::fields, "", "coarse-grained fields of the discharge"), 2),
+             Placement::own));
+    // Issue 13: absent in results stored before (read with none).
+    v(since(in(field("avalanche_sizes", &R::avalanche_sizes, "1",
+                     "particles that crossed the outlet plane during each survival interval (0 "
+                     "when has_avalanche_sizes is false)"),
+               Family::survival, "avalanche_size"),
+            3));
+    v(placed(
+        since(field("arches", &R::arches, "", "the arch that blocked the outlet at each jam"), 3),
+        Placement::own));
+}
+
+// The result format version a result needs: the largest `since` of the members it holds (a
+// vector or string not empty, an optional set, a struct holding one). Results that hold no
+// later member keep the bytes of the version they would have had before it existed.
+template <class T>
+constexpr bool holds_value(const T& v) {
+    if constexpr (requires { v.empty(); })
+        return !v.empty();
+    else if constexpr (requires { v.has_value(); })
+        return v.has_value();
+    else
+        return true;
+}
+inline std::uint16_t result_version(const RealizationResult& r) {
+    std::uint16_t v = 1;
+    for_each_result_field([&](const auto& f) {
+        if (f.placement == Placement::nowhere) return;
+        if constexpr (std::is_same_v<std::remove_cvref_t<decltype(r.*f.member)>, Diagnostics>) {
+            for_each_diagnostic([&](const auto& d) {
+                if (d.placement != Placement::nowhere && holds_value(r.diagnostics.*d.member))
+                    v = std::max(v, d.since);
+            });
+        } else if (holds_value(r.*f.member)) {
+            v = std::max(v, f.since);
+        }
+    });
+    return v;
+}
+// The newest result format version (the largest `since` of any member).
+inline constexpr std::uint16_t result_format_version = [] {
+    std::uint16_t v = 1;
+    for_each_result_field([&](const auto& f) { v = std::max(v, f.since); });
+    for_each_diagnostic([&](const auto& f) { v = std::max(v, f.since); });
+    return v;
+}();
 
 }  // namespace hopper::engine

@@ -55,10 +55,15 @@ std::string hex64(std::uint64_t v);  // 16 lowercase hex digits
 //   Version 4 (issue 12): version 3 with the force path (a string) at the end of the
 //              diagnostics. Written whenever a result has one (every result of this build);
 //              versions 1 to 3 decode with none.
-// All four versions are read. Decoding the fields checks them before allocating: nx, ny positive,
-// nx * ny at most max_field_nodes and within the bytes left, every per-node array nx * ny long,
-// every number finite, counts non-negative; otherwise core::StoreError.
-inline constexpr std::uint16_t result_codec_version = 4;
+//   Version 5 and later: the previous version, then the members whose `since` is that version,
+//              in the description's order (engine/result.hpp), framed by their types as above.
+//              A result is written with the version engine::result_version gives (the newest
+//              member it holds), so adding a member changes no earlier result's bytes.
+// Every version up to result_codec_version is read. Decoding the fields checks them before
+// allocating: nx, ny positive, nx * ny at most max_field_nodes and within the bytes left, every
+// per-node array nx * ny long, every number finite, counts non-negative; otherwise
+// core::StoreError.
+inline constexpr std::uint16_t result_codec_version = engine::result_format_version;  // 4
 inline constexpr std::uint16_t result_codec_version_science = 3;
 inline constexpr std::uint16_t result_codec_version_fields = 2;
 inline constexpr std::uint16_t result_codec_version_without_fields = 1;
