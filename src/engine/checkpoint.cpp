@@ -247,9 +247,9 @@ void fields(Io& io, M& m) {
     });
 }
 
-// The result so far, described once (its byte order is state format 2's).
+// The result so far in state format 2, kept to read the states written before format 3.
 template <class Io, Is<RealizationResult> R>
-void fields(Io& io, R& res) {
+void result_v2(Io& io, R& res) {
     io.enumeration(res.status, Status::failed);
     io(res.message);
     io(res.seed);
@@ -293,16 +293,65 @@ void fields(Io& io, R& res) {
     io.check([&] { return res.arches.size() <= res.jam_onsets.size(); });
 }
 
+// One arch in the state format.
+template <class Io, Is<Arch> A>
+void arch(Io& io, A& a) {
+    io(a.ids);
+    io(a.x);
+    io(a.y);
+    io(a.span);
+    io(a.max_angle);
+    io.check([&] { return a.x.size() == a.ids.size() && a.y.size() == a.ids.size(); });
+}
+
+// One member of the result in the state format, chosen by its type: enumerations within their
+// range, optionals flagged, events and diagnostics by their own descriptions (result.hpp).
+template <class Io, class M>
+void member(Io& io, M& v) {
+    using T = std::remove_const_t<M>;
+    if constexpr (std::is_same_v<T, Status>) {
+        io.enumeration(v, Status::failed);
+    } else if constexpr (std::is_same_v<T, Event::Kind>) {
+        io.enumeration(v, Event::Kind::stop);
+    } else if constexpr (std::is_same_v<T, std::optional<double>>) {
+        io.flagged(v);
+    } else if constexpr (std::is_same_v<T, std::optional<FieldMoments>>) {
+        io.optional(v, [&](auto& m) { fields(io, m); });
+    } else if constexpr (std::is_same_v<T, std::vector<Event>>) {
+        io.list(v, 24, [&](auto& e) {
+            for_each_event_field([&](const auto& f) { member(io, e.*f.member); });
+        });
+    } else if constexpr (std::is_same_v<T, std::vector<Arch>>) {
+        io.list(v, 32, [&](auto& a) { arch(io, a); });
+    } else if constexpr (std::is_same_v<T, Diagnostics>) {
+        for_each_diagnostic([&](const auto& f) { member(io, v.*f.member); });
+    } else {
+        io(v);
+    }
+}
+
+// The result so far in state format 3: every member of its description (result.hpp), in its
+// order, the wall-clock and unjournaled diagnostics too (a resumed realization goes on counting
+// them). A member added to the description is saved and restored without an edit here.
+template <class Io, Is<RealizationResult> R>
+void result_v3(Io& io, R& res) {
+    for_each_result_field([&](const auto& f) { member(io, res.*f.member); });
+    io.check([&] { return res.arches.size() <= res.jam_onsets.size(); });
+}
+
 }  // namespace
 
 void save_result(const RealizationResult& res, StateWriter& w) {
     StatePut io(w);
-    fields(io, res);
+    result_v3(io, res);
 }
 
-void restore_result(RealizationResult& res, StateReader& r) {
+void restore_result(RealizationResult& res, StateReader& r, std::uint32_t format) {
     StateGet io(r);
-    fields(io, res);
+    if (format >= 3)
+        result_v3(io, res);
+    else
+        result_v2(io, res);
 }
 
 // The field accumulator's open window, described once.

@@ -140,14 +140,15 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
     StateReader r(bytes);
     r.get_string();
     const auto version = r.get<std::uint32_t>();
-    if (version != state_format_version)
+    if (version < oldest_state_format_read || version > state_format_version)
         throw core::ConfigError("the checkpoint has state format " + std::to_string(version) +
-                                "; this engine reads format " +
+                                "; this engine reads formats " +
+                                std::to_string(oldest_state_format_read) + " to " +
                                 std::to_string(state_format_version));
     check_fingerprint(r);
     StateGet io(r);
     protocol_fields(io, *this);
-    restore_result(res, r);
+    restore_result(res, r, version);
     CheckpointAccess::restore(*sys, r);
     remember_reinserted();
     fields.acc.reset();

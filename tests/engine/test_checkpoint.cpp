@@ -181,7 +181,11 @@ INSTANTIATE_TEST_SUITE_P(
 // described once, issue 42; the jamming scene with fields, gear4, seed 2, stopped inside its
 // first shake) still resumes here, to the uninterrupted realization bit for bit.
 // HOPPER_WRITE_STATE_FIXTURE=PATH writes such a state (to make a fixture of a new format).
-TEST(CheckpointFormat, AStateWrittenByAnEarlierBuildStillResumesBitIdentical) {
+// Each state format's fixture: format 2 (round 3 to issue 42: the result's hand-written list)
+// and format 3 (the result walked by its description), both written by the build of their day.
+class CheckpointFormat : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CheckpointFormat, AStateWrittenByAnEarlierBuildStillResumesBitIdentical) {
     const SceneParams p = jamming(Scheme::gear4, true);
     const RealizationResult ref = run_realization(p, 2);
     ASSERT_GE(ref.n_jams, 1);
@@ -199,8 +203,7 @@ TEST(CheckpointFormat, AStateWrittenByAnEarlierBuildStillResumesBitIdentical) {
         std::printf("wrote %zu bytes at step %lld (%s)\n", state.size(), (long long)in_shake,
                     std::string(to_string(phase)).c_str());
     }
-    const std::string path =
-        std::string(HOPPER_SOURCE_DIR) + "/tests/engine/data/state-v2-gear4-fields.bin";
+    const std::string path = std::string(HOPPER_SOURCE_DIR) + "/tests/engine/data/" + GetParam();
     std::ifstream in(path, std::ios::binary);
     ASSERT_TRUE(in) << path;
     const std::vector<std::uint8_t> state((std::istreambuf_iterator<char>(in)),
@@ -209,6 +212,90 @@ TEST(CheckpointFormat, AStateWrittenByAnEarlierBuildStillResumesBitIdentical) {
     const RealizationResult resumed = resume_realization(p, 2, state);
     EXPECT_EQ(bytes_of(resumed), bytes_of(ref));
     EXPECT_EQ(resumed.n_jams, ref.n_jams);
+}
+
+INSTANTIATE_TEST_SUITE_P(Fixtures, CheckpointFormat,
+                         ::testing::Values("state-v2-gear4-fields.bin",
+                                           "state-v3-gear4-fields.bin"),
+                         [](const auto& info) { return std::string(info.param).substr(6, 2); });
+
+// Format 3 saves the result by walking its description: every described member, set to a value
+// other than its default, comes back (a member the walk left out would come back as its default).
+TEST(CheckpointResult, EveryDescribedMemberIsSavedAndRestored) {
+    RealizationResult x;
+    x.status = Status::arrested;
+    x.message = "m";
+    x.seed = 7;
+    x.particles = 3;
+    x.wall_particles = 4;
+    x.survival_times = {0.5, 1.5};
+    x.censored = {false, true};
+    x.jam_onsets = {0.5};
+    x.shakes_per_jam = {2};
+    x.avalanche_sizes = {5, 6};
+    x.arches.resize(1);
+    x.arches[0].ids = {1, 2};
+    x.arches[0].x = {0.1, 0.2};
+    x.arches[0].y = {0.3, 0.4};
+    x.arches[0].span = 0.05;
+    x.arches[0].max_angle = 2.5;
+    x.n_jams = 1;
+    x.n_shakes = 2;
+    x.n_jams_multi_shake = 1;
+    x.empty_time = 9.0;
+    x.discharge_rate = 8.0;
+    x.discharge_rate_mass = 0.25;
+    x.discharged = 2;
+    x.exit_times = {1.0, 2.0};
+    x.curve_time = {0.0};
+    x.curve_count = {3};
+    x.events = {{Event::Kind::jam, 0.5, 0.7, 2}};
+    x.fields.emplace();
+    x.fields->windows = {1};
+    x.fields->grid.nx = 1;
+    x.fields->grid.ny = 1;
+    x.fields->weight = {1.0};
+    for (int f = 0; f < field_count; ++f) {
+        x.fields->mean[f] = {0.5};
+        x.fields->m2[f] = {0.25};
+    }
+    double next = 1.0;
+    for_each_diagnostic([&](const auto& f) {
+        auto& v = x.diagnostics.*f.member;
+        if constexpr (std::is_same_v<std::remove_cvref_t<decltype(v)>, std::string>)
+            v = "avx2";
+        else
+            v = static_cast<std::remove_cvref_t<decltype(v)>>(next++);
+    });
+    StateWriter w;
+    save_result(x, w);
+    const std::vector<std::uint8_t> bytes = w.take();
+    StateReader r(bytes);
+    RealizationResult y;
+    restore_result(y, r, state_format_version);
+    EXPECT_TRUE(r.at_end());
+    for_each_result_field([&](const auto& f) {
+        using M = std::remove_cvref_t<decltype(x.*f.member)>;
+        constexpr bool plain =
+            std::is_arithmetic_v<M> || std::is_enum_v<M> || std::is_same_v<M, std::string> ||
+            std::is_same_v<M, std::vector<double>> || std::is_same_v<M, std::vector<int>> ||
+            std::is_same_v<M, std::vector<bool>> || std::is_same_v<M, std::optional<double>>;
+        if constexpr (plain)
+            EXPECT_EQ(y.*f.member, x.*f.member) << f.name;
+        else
+            EXPECT_EQ(holds_value(y.*f.member), holds_value(x.*f.member)) << f.name;
+    });
+    for_each_diagnostic([&](const auto& f) {
+        EXPECT_EQ(y.diagnostics.*f.member, x.diagnostics.*f.member) << f.name;
+    });
+    ASSERT_EQ(y.events.size(), 1u);
+    EXPECT_EQ(y.events[0].kind, Event::Kind::jam);
+    EXPECT_EQ(y.events[0].in_hopper, 2);
+    ASSERT_EQ(y.arches.size(), 1u);
+    EXPECT_EQ(y.arches[0].y, x.arches[0].y);
+    EXPECT_EQ(y.arches[0].max_angle, 2.5);
+    ASSERT_TRUE(y.fields);
+    EXPECT_EQ(y.fields->m2[field_count - 1], std::vector<double>{0.25});
 }
 
 TEST(CheckpointRefusal, AnotherRealizationFormatOrDamageIsRefusedWithTheReason) {

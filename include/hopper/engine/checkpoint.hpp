@@ -36,7 +36,10 @@
 namespace hopper::engine {
 
 // 2 (round 3): the springs saved across a rebuild (by id) are no longer part of the state.
-inline constexpr std::uint32_t state_format_version = 2;
+// 3 (issue 42): the result so far walked by its description (engine/result.hpp), so that a
+// member added there is saved without another list; format 2 states are still read.
+inline constexpr std::uint32_t state_format_version = 3;
+inline constexpr std::uint32_t oldest_state_format_read = 2;
 
 // Little-endian byte buffer writer/reader for the state (fixed-width values, vectors as a
 // 64-bit count followed by the elements), on core::ByteWriter and core::ByteReader.
@@ -255,7 +258,8 @@ struct CheckpointAccess {
     static void accumulator(Io& io, A& a);
 };
 
+// The result so far: written in state_format_version, read in the format a state was written.
 void save_result(const RealizationResult& res, StateWriter& w);
-void restore_result(RealizationResult& res, StateReader& r);
+void restore_result(RealizationResult& res, StateReader& r, std::uint32_t format);
 
 }  // namespace hopper::engine
