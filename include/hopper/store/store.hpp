@@ -204,10 +204,6 @@ struct StoreOptions {
     // rebuilt file is renamed into place), "close" (HDF5 closed, sync record not yet written).
     std::string crash_point;
     int crash_after = 0;
-    // Test hook: raise SIGSTOP once this many results of this process's runs are durable (the
-    // journal synced and the HDF5 view updated); 0: never. A test then acts on a run frozen in
-    // a known state (so many stored, the rest not yet handed out) instead of racing it.
-    int stop_after_results = 0;
     // False: a file system without locks is accepted (with a note) instead of refused; nothing
     // then keeps two runs from writing the store at once (`campaign run --no-file-locking`).
     bool require_lock = true;
@@ -216,6 +212,10 @@ struct StoreOptions {
     std::function<void()> before_journal_link;
     // The typed /points/parameters columns (see PointParameters); empty: not written.
     PointParameters point_parameters;
+    // Test hook: raise SIGSTOP once this many results of this process's runs are durable (the
+    // journal synced and the HDF5 view updated); 0: never. A test then acts on a run frozen in
+    // a known state (so many stored, the rest not yet handed out) instead of racing it.
+    int stop_after_results = 0;  // last: positional initializers of the above stay valid
 };
 
 // The master's handle. Opening takes the journal's lock (one writer at a time), scans the
