@@ -481,12 +481,37 @@ class Store:
             "curve", ["curve_time", "curve_in_hopper"],
             {"curve_time": "time", "curve_in_hopper": "in_hopper"})))
 
+    def _family_arrays(self, family, known):
+        """The /ragged arrays of a family: those whose "family" attribute names it (files from
+        issue 42 on: every array the engine describes, later ones included), else `known`."""
+        g = self._f["ragged"]
+        tagged = [k for k in g if g[k].attrs.get("family") in (family, family.encode())]
+        return tagged or [k for k in known if k in g]
+
+    def _blank_older_rows(self, df, names):
+        """NaN in the arrays a row's result is older than (their "since" attribute above its
+        result_version): those rows hold padding there, not values."""
+        if "result_version" not in self._f["realizations"] or not len(df):
+            return df
+        version = self._f["realizations/result_version"][:][df["row"].to_numpy()]
+        for name, column in names.items():
+            since = int(self._f["ragged/" + name].attrs.get("since", 1))
+            if since > 1:
+                df[column] = df[column].astype(float).where(version >= since)
+        return df
+
     @property
     def jams(self):
-        """One row per jam: onset (s of discharge time), shakes (to restart the flow)."""
-        return self._cached("jams", lambda: self._add_point_columns(self._ragged(
-            "jam", ["jam_onsets", "shakes_per_jam"],
-            {"jam_onsets": "onset", "shakes_per_jam": "shakes"})))
+        """One row per jam: onset (s of discharge time), shakes (to restart the flow), and every
+        later per-jam observable under its own name (docs/model.md, "Realization protocol",
+        step 9; NaN for jams of realizations stored before it existed)."""
+        def make():
+            rename = {"jam_onsets": "onset", "shakes_per_jam": "shakes"}
+            names = self._family_arrays("jam", list(rename))
+            df = self._ragged("jam", names, rename)
+            df = self._blank_older_rows(df, {n: rename.get(n, n) for n in names})
+            return self._add_point_columns(df)
+        return self._cached("jams", make)
 
     @property
     def arches(self):

@@ -15,23 +15,19 @@ namespace hopper::store::layout {
 
 const std::vector<RaggedFamily>& families() {
     static const std::vector<RaggedFamily> f = {
-        {"survival", "survival intervals (survival_times, censored)",
+        {"survival", "survival intervals",
          [](const engine::RealizationResult& r) { return r.survival_times.size(); }},
-        {"jam", "jams (jam_onsets, shakes_per_jam)",
-         [](const engine::RealizationResult& r) { return r.jam_onsets.size(); }},
-        {"exit", "exits (exit_times)",
-         [](const engine::RealizationResult& r) { return r.exit_times.size(); }},
-        {"curve", "discharge curve samples (curve_time, curve_in_hopper)",
+        {"jam", "jams", [](const engine::RealizationResult& r) { return r.jam_onsets.size(); }},
+        {"exit", "exits", [](const engine::RealizationResult& r) { return r.exit_times.size(); }},
+        {"curve", "discharge curve samples",
          [](const engine::RealizationResult& r) { return r.curve_time.size(); }},
-        {"event", "event log (event_kind, event_time, event_sim_time, event_in_hopper)",
+        {"event", "events of the log",
          [](const engine::RealizationResult& r) { return r.events.size(); }},
         // Issue 13: absent from files written before (read_realizations reads such files with
         // none; the writer rebuilds them from the journal).
-        {"arch", "arches, one per jam (arch_disks, arch_span, arch_max_angle)",
+        {"arch", "arches, one per jam",
          [](const engine::RealizationResult& r) { return r.arches.size(); }},
-        {"arch_disk",
-         "the arches' disks, all arches of the realization in jam order (arch_disk_id, "
-         "arch_disk_x, arch_disk_y)",
+        {"arch_disk", "the arches' disks, all arches of the realization in jam order",
          [](const engine::RealizationResult& r) {
              std::size_t n = 0;
              for (const auto& a : r.arches)
@@ -250,7 +246,7 @@ ColumnDef array_column(const FieldDef<engine::RealizationResult, std::vector<E>>
     using T = stored_t<E>;
     const auto m = f.member;
     const int family = static_cast<int>(f.family);
-    return ragged<T>(
+    ColumnDef c = ragged<T>(
         std::string(f.column_name()), kind_of<E>(), family, std::string(f.units),
         std::string(f.description),
         [m, family](std::vector<T>& out, const engine::RealizationResult& r) {
@@ -268,6 +264,8 @@ ColumnDef array_column(const FieldDef<engine::RealizationResult, std::vector<E>>
                 v[i] = x;
             }
         });
+    c.since = f.since;
+    return c;
 }
 
 // A member of every event: /ragged/event_<name> in the event family.
@@ -470,6 +468,23 @@ const std::vector<ColumnDef>& columns() {
                     o.result.avalanche_sizes.clear();
                     o.result.arches.clear();
                 }
+            }));
+        // Last of all, so that its pull sees every array read above: the result format version
+        // of the row's result. The arrays of later members hold padding (one 0 per element of
+        // their family) in the rows of older results; reading them back leaves them empty, as
+        // the journal's decoding does.
+        out.push_back(row<std::int32_t>(
+            G, "result_version", Kind::i32, "1",
+            "result format version of the realization's record: the newest member it holds "
+            "(arrays with a later 'since' attribute hold padding in its row)",
+            [](const Src& s) { return static_cast<std::int32_t>(engine::result_version(s.r)); },
+            [](StoredRealization& o, std::int32_t v) {
+                for_each_result_field([&](const auto& f) {
+                    using M = std::remove_cvref_t<decltype(o.result.*f.member)>;
+                    if constexpr (is_vector<M>)
+                        if (f.placement == Placement::column && f.since > v)
+                            (o.result.*f.member).clear();
+                });
             }));
         return out;
     }();

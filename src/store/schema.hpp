@@ -78,7 +78,7 @@ struct Src {
 
 struct RaggedFamily {
     const char* name;
-    const char* description;
+    const char* description;  // the writer adds the names of the family's arrays
     std::function<std::size_t(const engine::RealizationResult&)> length;
 };
 const std::vector<RaggedFamily>& families();
@@ -92,6 +92,9 @@ struct ColumnDef {
     int family;  // -1: one value per row; otherwise the index in families()
     std::function<void(Buffer&, const Src&)> push;
     std::function<void(StoredRealization&, const Buffer&, std::size_t at, std::size_t n)> pull;
+    // The result format version that added the member (engine/result.hpp); > 1 is written as
+    // the dataset's "since" attribute: rows whose result_version is older hold padding there.
+    std::uint16_t since = 1;
 };
 // In creation order; read back in this order (a pull may rely on the columns before it).
 const std::vector<ColumnDef>& columns();

@@ -85,19 +85,27 @@ struct Writer::Impl {
         describe(g_ragged, "",
                  "concatenated per-realization arrays; realization i's values of family f are "
                  "[f_start[i], f_start[i] + f_length[i]) in /realizations");
+        std::vector<std::string> members(families().size());  // each family's arrays
         for (const ColumnDef& d : columns()) {
             h5::Id ds = h5::create_column(group_of(d.group), d.name, types.file_type(d.kind),
                                           d.family < 0 ? row_chunk : ragged_chunk);
             describe(ds, d.units, d.description);
+            if (d.family >= 0) {
+                const auto fi = static_cast<std::size_t>(d.family);
+                h5::set_attr(ds, "family", std::string(families()[fi].name));
+                members[fi] += (members[fi].empty() ? "" : ", ") + d.name;
+            }
+            if (d.since > 1) h5::set_attr(ds, "since", std::int64_t{d.since});
         }
         for (const RaggedFamily& f : families()) {
+            const std::string what =
+                std::string(f.description) + " (" + members[std::size_t(&f - &families()[0])] + ")";
             h5::Id s = h5::create_column(g_real, std::string(f.name) + "_start",
                                          h5::file_type(h5::Scalar::i64), row_chunk);
-            describe(s, "1",
-                     std::string("offset into /ragged of this realization's ") + f.description);
+            describe(s, "1", "offset into /ragged of this realization's " + what);
             h5::Id l = h5::create_column(g_real, std::string(f.name) + "_length",
                                          h5::file_type(h5::Scalar::i32), row_chunk);
-            describe(l, "1", std::string("number of ") + f.description);
+            describe(l, "1", "number of " + what);
         }
         auto table = [&](const char* name, const char* description,
                          const std::vector<TableColumn>& defs) {
