@@ -349,6 +349,33 @@ struct Decoder {
     }
 };
 
+// An array of a ragged family has one value per element of the family's first array (read
+// before it, in the description's order): survival intervals, jams, discharge curve samples.
+template <class F>
+void check_family_length(ByteReader& in, const F& f, const engine::RealizationResult& r) {
+    using M = std::remove_cvref_t<decltype(r.*f.member)>;
+    if constexpr (requires(const M& v) { v.size(); } && !std::is_same_v<M, std::string>) {
+        std::size_t want = 0;
+        const char* of = "";
+        switch (f.family) {
+            case Family::survival:
+                want = r.survival_times.size(), of = "survival intervals";
+                break;
+            case Family::jam:
+                want = r.jam_onsets.size(), of = "jams";
+                break;
+            case Family::curve:
+                want = r.curve_time.size(), of = "curve samples";
+                break;
+            default:
+                return;
+        }
+        if ((r.*f.member).size() != want)
+            in.fail(std::string(f.name) + ": " + std::to_string((r.*f.member).size()) +
+                    " values for " + std::to_string(want) + " " + of);
+    }
+}
+
 }  // namespace
 
 void encode_result(ByteWriter& w, const engine::RealizationResult& r) {
@@ -380,7 +407,9 @@ engine::RealizationResult decode_result(ByteReader& in) {
     engine::RealizationResult r;
     Decoder d{in, version, r};
     for_each_result_field([&](const auto& f) {
-        if (f.since <= version) d.get(r.*f.member);
+        if (f.since > version) return;
+        d.get(r.*f.member);
+        check_family_length(in, f, r);
     });
     return r;
 }

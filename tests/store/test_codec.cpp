@@ -336,6 +336,26 @@ TEST(ResultCodec, InconsistentAvalanchesAndArchesAreCleanErrors) {
     EXPECT_NE(decode_error_of(encode_result(bad)).find("negative size"), std::string::npos);
 }
 
+// Every array of a family has as many values as the family's first array (the check follows
+// the description, so an array added to a family later is checked too).
+TEST(ResultCodec, AnArrayOfAFamilyWithAnotherLengthIsACleanError) {
+    const auto r = testing::with_science(testing::fabricated(2), 1);  // 3 intervals, 2 jams
+    auto bad = r;
+    bad.shakes_per_jam.pop_back();
+    EXPECT_NE(decode_error_of(encode_result(bad)).find("shakes_per_jam: 1 values for 2 jams"),
+              std::string::npos)
+        << decode_error_of(encode_result(bad));
+    bad = r;
+    bad.censored.push_back(true);
+    EXPECT_NE(
+        decode_error_of(encode_result(bad)).find("censored: 4 values for 3 survival intervals"),
+        std::string::npos)
+        << decode_error_of(encode_result(bad));
+    bad = r;
+    bad.curve_count.push_back(1);
+    EXPECT_NE(decode_error_of(encode_result(bad)).find("curve_count: "), std::string::npos);
+}
+
 // Every journal record type, fabricated with every member set, keeps the bytes it was written
 // with (frozen: the FNV-1a 64 of each encoding, taken when the records were first described
 // once, issue 42), decodes back to what was encoded, and reads the shapes older writers left
