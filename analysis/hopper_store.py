@@ -486,7 +486,7 @@ class Store:
         issue 42 on: every array the engine describes, later ones included), else `known`."""
         g = self._f["ragged"]
         tagged = [k for k in g if g[k].attrs.get("family") in (family, family.encode())]
-        return tagged or [k for k in known if k in g]
+        return [k for k in known if k in g] + [k for k in tagged if k not in known]
 
     def _blank_older_rows(self, df, names):
         """NaN in the arrays a row's result is older than (their "since" attribute above its

@@ -330,12 +330,17 @@ void member(Io& io, M& v) {
     }
 }
 
-// The result so far in state format 3: every member of its description (result.hpp), in its
-// order, the wall-clock and unjournaled diagnostics too (a resumed realization goes on counting
-// them). A member added to the description is saved and restored without an edit here.
+// The result so far in state format 3: the result format version of the build that wrote it
+// (result_format_version), then every member of the description (result.hpp) up to that
+// version, in its order, the wall-clock and unjournaled diagnostics too (a resumed realization
+// goes on counting them). A member added to the description later is saved and restored
+// without an edit here; in a state written before it, it starts empty (and a per-element array
+// that then misses the elements before the state is left out: drop_incomplete_arrays).
 template <class Io, Is<RealizationResult> R>
-void result_v3(Io& io, R& res) {
-    for_each_result_field([&](const auto& f) { member(io, res.*f.member); });
+void result_v3(Io& io, R& res, std::uint16_t version) {
+    for_each_result_field([&](const auto& f) {
+        if (f.since <= version) member(io, res.*f.member);
+    });
     io.check([&] { return res.arches.size() <= res.jam_onsets.size(); });
 }
 
@@ -343,15 +348,18 @@ void result_v3(Io& io, R& res) {
 
 void save_result(const RealizationResult& res, StateWriter& w) {
     StatePut io(w);
-    result_v3(io, res);
+    std::uint16_t version = result_format_version;
+    io(version);
+    result_v3(io, res, version);
 }
 
 void restore_result(RealizationResult& res, StateReader& r, std::uint32_t format) {
     StateGet io(r);
-    if (format >= 3)
-        result_v3(io, res);
-    else
-        result_v2(io, res);
+    if (format < 3) return result_v2(io, res);
+    std::uint16_t version = 0;
+    io(version);
+    io.check([&] { return version >= 1 && version <= result_format_version; });
+    result_v3(io, res, version);
 }
 
 // The field accumulator's open window, described once.

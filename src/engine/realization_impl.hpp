@@ -372,6 +372,9 @@ struct Realization::Impl {
         res.avalanche_sizes.push_back(left - interval_base);
         interval_base = left;
         res.arches.push_back(current_arch());
+        const std::vector<double>& ay = res.arches.back().y;
+        res.arch_heights.push_back(
+            ay.empty() ? 0.0 : *std::max_element(ay.begin(), ay.end()) - det.y_outlet);
         shaker.shakes_this_jam = 0;
         if (p.protocol.mode == ProtocolMode::steady_state && p.protocol.jams_per_realization > 0 &&
             res.n_jams >= p.protocol.jams_per_realization)
@@ -492,6 +495,7 @@ struct Realization::Impl {
 
     RealizationResult result() const {
         RealizationResult out = res;
+        drop_incomplete_arrays(out);
         out.n_jams_multi_shake = int(std::count_if(
             out.shakes_per_jam.begin(), out.shakes_per_jam.end(), [](int n) { return n > 1; }));
         auto& d = out.diagnostics;

@@ -350,29 +350,19 @@ struct Decoder {
 };
 
 // An array of a ragged family has one value per element of the family's first array (read
-// before it, in the description's order): survival intervals, jams, discharge curve samples.
+// before it, in the description's order): survival intervals, jams, exits, curve samples.
 template <class F>
 void check_family_length(ByteReader& in, const F& f, const engine::RealizationResult& r) {
     using M = std::remove_cvref_t<decltype(r.*f.member)>;
     if constexpr (requires(const M& v) { v.size(); } && !std::is_same_v<M, std::string>) {
-        std::size_t want = 0;
-        const char* of = "";
-        switch (f.family) {
-            case Family::survival:
-                want = r.survival_times.size(), of = "survival intervals";
-                break;
-            case Family::jam:
-                want = r.jam_onsets.size(), of = "jams";
-                break;
-            case Family::curve:
-                want = r.curve_time.size(), of = "curve samples";
-                break;
-            default:
-                return;
-        }
-        if ((r.*f.member).size() != want)
+        const auto want = engine::family_length(r, f.family);
+        if (want && (r.*f.member).size() != *want)
             in.fail(std::string(f.name) + ": " + std::to_string((r.*f.member).size()) +
-                    " values for " + std::to_string(want) + " " + of);
+                    " values for " + std::to_string(*want) + " elements of its family (" +
+                    std::string(f.family == Family::survival ? "survival intervals"
+                                : f.family == Family::jam    ? "jams"
+                                                             : "samples") +
+                    ")");
     }
 }
 

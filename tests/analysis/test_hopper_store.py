@@ -109,6 +109,15 @@ with open_store(store_path) as s:
         check(len(df) == int(raw[family + "_length"][:].sum()), "%s: every value" % name)
     check(int(s.jams.groupby("row").size().sum()) == int(raw["n_jams"][:].sum()), "jams = n_jams")
     check(set(s.events["kind"]) >= {"opened"}, "event kinds by name")
+    # every array of the jam family, a later member (arch_heights, since 5) by its own name
+    jams = s.jams
+    check(list(jams.columns[6:]) == ["onset", "shakes", "arch_heights"],
+          "jams columns: %s" % list(jams.columns))
+    check(f["ragged/arch_heights"].attrs["family"] == "jam" and
+          int(f["ragged/arch_heights"].attrs["since"]) == 5, "arch_heights' family and since")
+    check(np.array_equal(jams["arch_heights"].to_numpy(), f["ragged/arch_heights"][:]),
+          "arch_heights as stored")
+    check(len(jams) == 0 or (jams["arch_heights"] >= 0).all(), "arch heights >= 0")
 
     fields = s.fields()
     check(len(fields) == 6, "fields of 6 points, got %d" % len(fields))
@@ -122,6 +131,26 @@ with open_store(store_path) as s:
           "mean_speed equal where windows > 0, NaN elsewhere")
     check(math.isclose(float(ds.x[0]), float(g.attrs["x0"]) + 0.5 * float(g.attrs["cell"])),
           "x is the cell centre")
+
+    # a row whose result is older than a member holds padding there: NaN, not 0
+    import shutil, tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        old_copy = pathlib.Path(tmp) / "older.h5"
+        shutil.copy(store_path, old_copy)
+        with h5py.File(old_copy, "r+") as g:
+            v = g["realizations/result_version"]
+            jammed = np.flatnonzero(g["realizations/jam_length"][:] > 0)
+            if len(jammed):
+                v[jammed[0]] = 4
+        with open_store(old_copy) as older:
+            oj = older.jams
+            if len(jammed):
+                rows = oj["row"].to_numpy() == jammed[0]
+                check(np.isnan(oj["arch_heights"].to_numpy()[rows]).all() and
+                      not np.isnan(oj["arch_heights"].to_numpy()[~rows]).any(),
+                      "arch_heights NaN in the row of a version-4 result only")
+            else:
+                check(False, "the store has no jam to test older rows with")
 
     # the export wrote the same rows
     for name in ("points", "realizations", "survival", "events", "curves", "jams", "exits",

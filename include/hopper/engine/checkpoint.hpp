@@ -36,8 +36,9 @@
 namespace hopper::engine {
 
 // 2 (round 3): the springs saved across a rebuild (by id) are no longer part of the state.
-// 3 (issue 42): the result so far walked by its description (engine/result.hpp), so that a
-// member added there is saved without another list; format 2 states are still read.
+// 3 (issue 42): the result so far walked by its description (engine/result.hpp), after the
+// result format version that says which members the state holds, so that a member added there
+// is saved without another list and older states still read; format 2 states are still read.
 inline constexpr std::uint32_t state_format_version = 3;
 inline constexpr std::uint32_t oldest_state_format_read = 2;
 

@@ -84,6 +84,9 @@ struct RealizationResult {
     // The arch that blocked the outlet at each jam (same length as jam_onsets; an arch that
     // was not found has no disks). Empty in results stored before arches existed.
     std::vector<Arch> arches;
+    // The height of each jam's arch: its highest disk centre above the outlet plane (m; 0: no
+    // arch found). Same length as jam_onsets; empty in results stored before it existed.
+    std::vector<double> arch_heights;
     int n_jams = 0;
     int n_shakes = 0;
     int n_jams_multi_shake = 0;            // jams that needed more than one shake
@@ -207,6 +210,12 @@ constexpr void for_each_result_field(V&& v) {
     v(placed(
         since(field("arches", &R::arches, "", "the arch that blocked the outlet at each jam"), 3),
         Placement::own));
+    // Issue 42: the first member added through the description alone (format 5).
+    v(since(in(field("arch_heights", &R::arch_heights, "m",
+                     "height of each jam's arch: its highest disk centre above the outlet plane "
+                     "(0: no arch found)"),
+               Family::jam),
+            5));
 }
 
 // The result format version a result needs: the largest `since` of the members it holds (a
@@ -236,6 +245,40 @@ inline std::uint16_t result_version(const RealizationResult& r) {
     });
     return v;
 }
+// The number of elements of a ragged family in a result: the length of its first array (every
+// array of the family has one value per element); none for the families kept otherwise.
+inline std::optional<std::size_t> family_length(const RealizationResult& r, Family f) {
+    switch (f) {
+        case Family::survival:
+            return r.survival_times.size();
+        case Family::jam:
+            return r.jam_onsets.size();
+        case Family::exit:
+            return r.exit_times.size();
+        case Family::curve:
+            return r.curve_time.size();
+        default:
+            return std::nullopt;
+    }
+}
+
+// A realization resumed from a state written before a member existed has no values of it for
+// the elements before the state: such an array (of a later member, not as long as its family)
+// is left out, and the result reads as one stored before the member existed.
+inline void drop_incomplete_arrays(RealizationResult& r) {
+    for_each_result_field([&](const auto& f) {
+        using M = std::remove_cvref_t<decltype(r.*f.member)>;
+        if constexpr (requires(M & v) {
+                          v.clear();
+                          v.size();
+                      } &&
+                      !std::is_same_v<M, std::string>) {
+            const auto n = family_length(r, f.family);
+            if (f.since > 1 && n && (r.*f.member).size() != *n) (r.*f.member).clear();
+        }
+    });
+}
+
 // The newest result format version (the largest `since` of any member).
 inline constexpr std::uint16_t result_format_version = [] {
     std::uint16_t v = 1;
