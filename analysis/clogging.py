@@ -496,6 +496,9 @@ def poisson_fits(points, dc_span_m=0.5, dc_fixed_m=None):
     store's fits (SI: B per m, D_c in m); a best D_c at the scan's far end means no finite D_c.
     With dc_fixed_m the power law's D_c is that one (the alternative to test; k = 2 then), the
     rest as is."""
+    # An outlet without flowing time yet (its first realizations still running) says nothing,
+    # and its n ln T would be 0 x -inf: left out.
+    points = [p for p in points if p["flow_time"] > 0]
     D = np.array([p["D_cm"] / 100 for p in points])
     n = np.array([p["tau"]["jams"] for p in points], float)
     T = np.array([p["flow_time"] for p in points], float)
