@@ -247,6 +247,17 @@ void fields(Io& io, M& m) {
     });
 }
 
+// One arch in the state format.
+template <class Io, Is<Arch> A>
+void arch(Io& io, A& a) {
+    io(a.ids);
+    io(a.x);
+    io(a.y);
+    io(a.span);
+    io(a.max_angle);
+    io.check([&] { return a.x.size() == a.ids.size() && a.y.size() == a.ids.size(); });
+}
+
 // The result so far in state format 2, kept to read the states written before format 3.
 template <class Io, Is<RealizationResult> R>
 void result_v2(Io& io, R& res) {
@@ -282,26 +293,8 @@ void result_v2(Io& io, R& res) {
     io.optional(res.fields, [&](auto& m) { fields(io, m); });
     // Issue 13: avalanche sizes and arches so far.
     io(res.avalanche_sizes);
-    io.list(res.arches, 32, [&](auto& a) {
-        io(a.ids);
-        io(a.x);
-        io(a.y);
-        io(a.span);
-        io(a.max_angle);
-        io.check([&] { return a.x.size() == a.ids.size() && a.y.size() == a.ids.size(); });
-    });
+    io.list(res.arches, 32, [&](auto& a) { arch(io, a); });
     io.check([&] { return res.arches.size() <= res.jam_onsets.size(); });
-}
-
-// One arch in the state format.
-template <class Io, Is<Arch> A>
-void arch(Io& io, A& a) {
-    io(a.ids);
-    io(a.x);
-    io(a.y);
-    io(a.span);
-    io(a.max_angle);
-    io.check([&] { return a.x.size() == a.ids.size() && a.y.size() == a.ids.size(); });
 }
 
 // One member of the result in the state format, chosen by its type: enumerations within their
