@@ -2,9 +2,10 @@
 // How a member of a persisted engine type is described (docs/model.md, "What each realization
 // reports"): its name, units, description and the result format version that added it, and
 // where the store puts it. The descriptions themselves stand beside their types (result.hpp);
-// every reader and writer of a result walks them (the journal's codec, the realization's
-// checkpoint, the store file's columns, the JSON of `campaign simulate`), so a member added
-// to a type and its description reaches all of them without another list to edit.
+// the journal's codec, the realization's checkpoint and the store file's columns walk them, so
+// a member added to a type and its description reaches all three (and hopper_store) without
+// another list to edit. The JSON of `campaign simulate` takes its values through them but
+// names its keys itself, in a documented order (cli/result_output.cpp).
 
 #include <cstdint>
 #include <string_view>
