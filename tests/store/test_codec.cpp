@@ -342,14 +342,15 @@ TEST(ResultCodec, AnArrayOfAFamilyWithAnotherLengthIsACleanError) {
     const auto r = testing::with_science(testing::fabricated(2), 1);  // 3 intervals, 2 jams
     auto bad = r;
     bad.shakes_per_jam.pop_back();
-    EXPECT_NE(decode_error_of(encode_result(bad)).find("shakes_per_jam: 1 values for 2 elements of its family (jams)"),
+    EXPECT_NE(decode_error_of(encode_result(bad))
+                  .find("shakes_per_jam: 1 values for 2 elements of its family (jams)"),
               std::string::npos)
         << decode_error_of(encode_result(bad));
     bad = r;
     bad.censored.push_back(true);
-    EXPECT_NE(
-        decode_error_of(encode_result(bad)).find("censored: 4 values for 3 elements of its family (survival intervals)"),
-        std::string::npos)
+    EXPECT_NE(decode_error_of(encode_result(bad))
+                  .find("censored: 4 values for 3 elements of its family (survival intervals)"),
+              std::string::npos)
         << decode_error_of(encode_result(bad));
     bad = r;
     bad.curve_count.push_back(1);
