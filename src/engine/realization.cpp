@@ -2,6 +2,7 @@
 
 #include <limits>
 
+#include "hopper/core/error.hpp"
 #include "realization_impl.hpp"
 
 namespace hopper::engine {

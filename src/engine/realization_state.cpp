@@ -1,11 +1,13 @@
-// The realization's checkpoint: its whole state to bytes and back (checkpoint.hpp), field by
-// field; the order is the state format (state_format_version).
+// The realization's checkpoint: its whole state to bytes and back (checkpoint.hpp): the
+// fingerprint, the protocol's state (protocol_state.hpp), the result so far, the System and the
+// fields, each walked by its description; the order is the state format (state_format_version).
+#include <algorithm>
+#include <sstream>
+
+#include "hopper/core/error.hpp"
 #include "realization_impl.hpp"
 
 namespace hopper::engine {
-
-using Clock = std::chrono::steady_clock;
-using Flow = detail::JamDetector::Flow;
 
 // What a state must agree on with the realization it is restored into.
 void Realization::Impl::put_fingerprint(StateWriter& w) const {
@@ -71,60 +73,13 @@ void Realization::Impl::remember_reinserted() {
     }
 }
 
-// The protocol's own state, described once (its byte order is state format 2's): the phase and
-// the detector's clocks, the shake, the discharge log's exits, the observers' schedules, the
-// settling clock, the avalanche base, the steady state's insertion height and its generator.
-template <class Io, class Self>
-void Realization::Impl::protocol_fields(Io& io, Self& s) {
-    io.enumeration(s.phase, Phase::shake);
-    io.enumeration(s.det.flow, Flow::ended);
-    io.template as<double>(  // the wall time so far (a resumed run's clock continues from it)
-        s.wall_start,
-        [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); },
-        [](double elapsed) {
-            return Clock::now() - std::chrono::duration_cast<Clock::duration>(
-                                      std::chrono::duration<double>(elapsed));
-        });
-    io(s.particle_steps);
-    io(s.td);
-    io(s.det.flow_start);
-    io(s.det.last_occupied);
-    io(s.det.check_start);
-    io(s.shaker.shake_start);
-    io(s.shaker.shakes_this_jam);
-    io.list(s.det.jammed, 16, [&](auto& on_off) {
-        io(on_off.first);
-        io(on_off.second);
-    });
-    io(s.log_.exit_mass);
-    io(s.step_count);
-    io(s.next_snapshot);
-    io(s.next_progress);
-    io(s.below_since);
-    io(s.interval_base);  // issue 13
-    io(s.reinserter.insert_base);
-    using Words = std::array<std::uint64_t, 4>;
-    io.template as<Words>(
-        s.rng,
-        [](const core::Rng& g) {
-            Words w{};
-            g.state(w.data());
-            return w;
-        },
-        [&](const Words& w) {
-            core::Rng g = s.rng;
-            g.set_state(w.data());
-            return g;
-        });
-}
-
 std::vector<std::uint8_t> Realization::Impl::save_state() const {
     StateWriter w;
     w.put_string("HOPPERRS");
     w.put(state_format_version);
     put_fingerprint(w);
     StatePut io(w);
-    protocol_fields(io, *this);
+    detail::describe(io, static_cast<const detail::ProtocolState&>(*this));
     save_result(res, w);
     CheckpointAccess::save(*sys, w);
     w.put<std::uint8_t>(fields.active());
@@ -147,7 +102,7 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
                                 std::to_string(state_format_version));
     check_fingerprint(r);
     StateGet io(r);
-    protocol_fields(io, *this);
+    detail::describe(io, static_cast<detail::ProtocolState&>(*this));
     restore_result(res, r, version);
     CheckpointAccess::restore(*sys, r);
     remember_reinserted();
