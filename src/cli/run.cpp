@@ -136,17 +136,9 @@ std::string shell_quoted(const std::string& word) {
     return out + "'";
 }
 
-}  // namespace
-
-int run_command(const std::vector<std::string>& args, const std::string& command_line) {
-    const po::variables_map vm = parse_command(args, run_options(), "sweep");
-    if (vm.count("help")) {
-        print_run_help(std::cout);
-        return 0;
-    }
-    const std::string sweep_path = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
-    campaign::RunOptions opt;
-    opt.sweep = sweep_path;
+// The options that shape the run: the store, the master's intervals and limits, threads,
+// checkpoints (each checked, naming what is allowed).
+void read_run_options(const po::variables_map& vm, campaign::RunOptions& opt) {
     if (vm.count("store")) {
         const std::string& s = vm["store"].as<std::string>();
         if (s.empty()) throw core::ConfigError("--store must not be empty");
@@ -190,17 +182,6 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         opt.threads = static_cast<int>(n);
         opt.threads_given = true;
     }
-    // Test hook (not for users): HOPPER_STORE_CRASH=<point>:<n> makes the store raise SIGKILL
-    // the n-th time it passes <point> (journal, hdf5, rebuild, close); see store.hpp.
-    if (const char* crash = std::getenv("HOPPER_STORE_CRASH")) {
-        const std::string c = crash;
-        const auto colon = c.find(':');
-        if (colon == std::string::npos)
-            throw core::ConfigError("HOPPER_STORE_CRASH must be <point>:<n>, got '" + c + "'");
-        opt.store_options.crash_point = c.substr(0, colon);
-        opt.store_options.crash_after =
-            static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
-    }
     opt.allow_mixed = vm["allow-mixed"].as<bool>();
     opt.dry_run = vm["dry-run"].as<bool>();
     opt.checkpoints = !vm["no-checkpoints"].as<bool>();
@@ -211,30 +192,46 @@ int run_command(const std::vector<std::string>& args, const std::string& command
         opt.checkpoint_interval =
             non_negative("--checkpoint-interval", vm["checkpoint-interval"].as<std::string>());
     }
-    {
-        // Checked now on every rank (a bad value is an error before anything starts); the
-        // Slurm end time is asked for on the master only (no squeue call per rank).
-        const bool given = vm.count("deadline") > 0;
-        const std::string text = given ? vm["deadline"].as<std::string>() : "";
-        const char* job = std::getenv("SLURM_JOB_ID");
-        const bool in_job = job && *job;
-        const bool slurm = text == "slurm" || text.starts_with("slurm-");
-        if (given && !slurm) {
-            const auto d = parse_deadline(text, store::unix_now());
-            if (d) opt.deadline = [d](std::ostream&) { return d; };
-        } else if (given && !in_job) {
-            parse_deadline(text, 0.0);  // throws: not inside a Slurm job (or a bad value)
-        } else if (given || in_job) {
-            opt.deadline = [given, text](std::ostream& err) -> std::optional<double> {
-                if (given) return parse_deadline(text, 0.0);  // throws, naming the reason
-                std::string why;
-                if (auto t = slurm_job_end(&why)) return t;
-                err << "campaign: note: no deadline (" << why
-                    << "); give --deadline to stop starting realizations that cannot finish"
-                    << std::endl;
-                return std::nullopt;
-            };
-        }
+}
+
+// --deadline (or the Slurm job's end): checked now on every rank (a bad value is an error before
+// anything starts); the Slurm end time is asked for on the master only (no squeue call per rank).
+void read_deadline(const po::variables_map& vm, campaign::RunOptions& opt) {
+    const bool given = vm.count("deadline") > 0;
+    const std::string text = given ? vm["deadline"].as<std::string>() : "";
+    const char* job = std::getenv("SLURM_JOB_ID");
+    const bool in_job = job && *job;
+    const bool slurm = text == "slurm" || text.starts_with("slurm-");
+    if (given && !slurm) {
+        const auto d = parse_deadline(text, store::unix_now());
+        if (d) opt.deadline = [d](std::ostream&) { return d; };
+    } else if (given && !in_job) {
+        parse_deadline(text, 0.0);  // throws: not inside a Slurm job (or a bad value)
+    } else if (given || in_job) {
+        opt.deadline = [given, text](std::ostream& err) -> std::optional<double> {
+            if (given) return parse_deadline(text, 0.0);  // throws, naming the reason
+            std::string why;
+            if (auto t = slurm_job_end(&why)) return t;
+            err << "campaign: note: no deadline (" << why
+                << "); give --deadline to stop starting realizations that cannot finish"
+                << std::endl;
+            return std::nullopt;
+        };
+    }
+}
+
+// The store's test hooks (not for users), from the environment.
+void read_test_hooks(campaign::RunOptions& opt) {
+    // Test hook (not for users): HOPPER_STORE_CRASH=<point>:<n> makes the store raise SIGKILL
+    // the n-th time it passes <point> (journal, hdf5, rebuild, close); see store.hpp.
+    if (const char* crash = std::getenv("HOPPER_STORE_CRASH")) {
+        const std::string c = crash;
+        const auto colon = c.find(':');
+        if (colon == std::string::npos)
+            throw core::ConfigError("HOPPER_STORE_CRASH must be <point>:<n>, got '" + c + "'");
+        opt.store_options.crash_point = c.substr(0, colon);
+        opt.store_options.crash_after =
+            static_cast<int>(parse_seed("HOPPER_STORE_CRASH", c.substr(colon + 1)));
     }
     // Test hook (not for users): HOPPER_STORE_STOP=result:<n> makes the store raise SIGSTOP once
     // the n-th result of the run is durable (tests act on the run frozen there; see store.hpp).
@@ -260,6 +257,70 @@ int run_command(const std::vector<std::string>& args, const std::string& command
             std::chrono::milliseconds(parse_seed("HOPPER_STORE_PAUSE", c.substr(prefix.size())));
         opt.store_options.before_journal_link = [ms] { std::this_thread::sleep_for(ms); };
     }
+}
+
+// At the end of a run that was not stopped: the same analysis as `campaign analyze`, then the
+// figures unless `plots` is off. Returns the run's exit code.
+int analyze_and_plot(const std::filesystem::path& store, int code, bool plots) {
+    if (code == campaign::run_stopped) return code;
+    std::cout << '\n';
+    // Issue 29, item 5: a run whose analysis could not be written (a full disk) must not
+    // exit 0: a script or a Slurm chain takes 0 as "done, analyzed".
+    const int not_written = code != exit_ok ? code : exit_analysis_not_written;
+    try {
+        bool written = false;
+        const int a = analyze_store(store, false, true, std::cout, std::cerr, &written);
+        if (!written) {
+            std::cerr << "campaign: every realization is stored (the journal holds them), but "
+                         "the analysis is not in the store: free space and run `campaign "
+                         "analyze "
+                      << store.string() << "`" << std::endl;
+            return not_written;
+        }
+        if (a != 0) return code;
+    } catch (const std::exception& e) {
+        std::cerr << "campaign: the analysis failed (the realizations are stored; retry with "
+                     "`campaign analyze "
+                  << store.string() << "`): " << e.what() << std::endl;
+        return not_written;
+    }
+    fs::path out = store;
+    out.replace_extension();
+    const std::string dir = out.string() + "_plots";
+    if (!plots) {
+        std::cout << "figures: campaign plot " << store.string() << " --out " << dir << '\n';
+        std::cout.flush();
+        return code;
+    }
+    // The figures, drawn by analysis/plots.py (a failure here never changes the run's code:
+    // the realizations and the analysis are stored).
+    std::cout << "figures (campaign plot " << store.string() << " --out " << dir << "):\n";
+    try {
+        if (run_python(analysis_dir() / "plots.py", {store.string(), "--out", dir}) != 0)
+            std::cerr << "campaign: note: the figures could not be drawn (see above); the "
+                         "store is complete: retry with `campaign plot "
+                      << store.string() << "`\n";
+    } catch (const std::exception& e) {
+        std::cerr << "campaign: note: no figures: " << e.what() << '\n';
+    }
+    std::cout.flush();
+    return code;
+}
+
+}  // namespace
+
+int run_command(const std::vector<std::string>& args, const std::string& command_line) {
+    const po::variables_map vm = parse_command(args, run_options(), "sweep");
+    if (vm.count("help")) {
+        print_run_help(std::cout);
+        return 0;
+    }
+    const std::string sweep_path = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
+    campaign::RunOptions opt;
+    opt.sweep = sweep_path;
+    read_run_options(vm, opt);
+    read_deadline(vm, opt);
+    read_test_hooks(opt);
     opt.code_version = HOPPER_VERSION;
     opt.command_line = command_line;
     opt.resume_command = "campaign run";
@@ -271,49 +332,7 @@ int run_command(const std::vector<std::string>& args, const std::string& command
     const char* env_plots = std::getenv("HOPPER_PLOTS");
     const bool plots = !vm["no-plots"].as<bool>() && !(env_plots && std::string(env_plots) == "0");
     opt.after_run = [plots](const std::filesystem::path& store, int code) {
-        if (code == campaign::run_stopped) return code;
-        std::cout << '\n';
-        // Issue 29, item 5: a run whose analysis could not be written (a full disk) must not
-        // exit 0: a script or a Slurm chain takes 0 as "done, analyzed".
-        const int not_written = code != exit_ok ? code : exit_analysis_not_written;
-        try {
-            bool written = false;
-            const int a = analyze_store(store, false, true, std::cout, std::cerr, &written);
-            if (!written) {
-                std::cerr << "campaign: every realization is stored (the journal holds them), but "
-                             "the analysis is not in the store: free space and run `campaign "
-                             "analyze "
-                          << store.string() << "`" << std::endl;
-                return not_written;
-            }
-            if (a != 0) return code;
-        } catch (const std::exception& e) {
-            std::cerr << "campaign: the analysis failed (the realizations are stored; retry with "
-                         "`campaign analyze "
-                      << store.string() << "`): " << e.what() << std::endl;
-            return not_written;
-        }
-        fs::path out = store;
-        out.replace_extension();
-        const std::string dir = out.string() + "_plots";
-        if (!plots) {
-            std::cout << "figures: campaign plot " << store.string() << " --out " << dir << '\n';
-            std::cout.flush();
-            return code;
-        }
-        // The figures, drawn by analysis/plots.py (a failure here never changes the run's code:
-        // the realizations and the analysis are stored).
-        std::cout << "figures (campaign plot " << store.string() << " --out " << dir << "):\n";
-        try {
-            if (run_python(analysis_dir() / "plots.py", {store.string(), "--out", dir}) != 0)
-                std::cerr << "campaign: note: the figures could not be drawn (see above); the "
-                             "store is complete: retry with `campaign plot "
-                          << store.string() << "`\n";
-        } catch (const std::exception& e) {
-            std::cerr << "campaign: note: no figures: " << e.what() << '\n';
-        }
-        std::cout.flush();
-        return code;
+        return analyze_and_plot(store, code, plots);
     };
     // SIGUSR1 asks for a drain while the master runs (it installs its own handler then); before
     // and after that, e.g. while the analysis runs at the end, it must not kill the process
