@@ -35,13 +35,25 @@ def digest(path, part="all"):
                 continue
             data = f[full][()]
             h.update(full.encode())
-            if isinstance(data, np.ndarray) and data.dtype.kind == "O":
-                for x in data.ravel():
-                    h.update(x if isinstance(x, bytes) else str(x).encode())
-                    h.update(b"\0")
-            else:
-                h.update(np.asarray(data).tobytes())
+            update(h, data)
     return h.hexdigest()
+
+
+def update(h, data):
+    """Hashes a dataset's values: numbers by their bytes, strings by their text. A compound
+    (/points/parameters) field by field: its raw bytes would hold the addresses of the Python
+    objects that h5py reads variable-length strings into, different at every read."""
+    data = np.asarray(data)
+    if data.dtype.names:
+        for name in data.dtype.names:
+            h.update(name.encode())
+            update(h, data[name])
+    elif data.dtype.kind == "O":
+        for x in data.ravel():
+            h.update(x if isinstance(x, bytes) else str(x).encode())
+            h.update(b"\0")
+    else:
+        h.update(data.tobytes())
 
 
 if __name__ == "__main__":
