@@ -284,74 +284,83 @@ void print_submit_help(std::ostream& os) {
        << submit_options();
 }
 
-int submit_command(const std::vector<std::string>& args) {
-    const po::variables_map vm = parse_command(args, submit_options(), "sweep");
-    if (vm.count("help")) {
-        print_submit_help(std::cout);
-        return 0;
-    }
-    const std::string sweep_path = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
+namespace {
 
-    // The sweep file is checked here, on the login node, not in the queue.
-    const config::SweepFile sweep = config::load_sweep(sweep_path);
-    if (!sweep.has_campaign)
-        throw ConfigError("'" + sweep_path + "' has no [campaign] section: nothing to submit");
+// The job: the store and its files, the allocation, the time limit and the signal's lead,
+// resubmissions, the launcher and the job's name (each checked, naming what is allowed).
+struct Job {
+    fs::path store, script, log;
+    long nodes = 1, ntasks = 2, limit = 0, lead = 0, max_resubmits = 10;
+    std::string time, launcher, setup = "# (no --setup file)", job_name;
+    double grace = 60.0;
+};
+
+Job read_job(const po::variables_map& vm, const config::SweepFile& sweep) {
+    Job j;
     fs::path store = sweep.campaign.store;
     if (vm.count("store")) {
         const std::string& s = vm["store"].as<std::string>();
         if (s.empty()) throw ConfigError("--store must not be empty");
         store = s;
     }
-    store = fs::absolute(store).lexically_normal();
-    const fs::path script = store.string() + ".sbatch";
-    const fs::path log = store.string() + ".slurm.log";
+    j.store = fs::absolute(store).lexically_normal();
+    j.script = j.store.string() + ".sbatch";
+    j.log = j.store.string() + ".slurm.log";
 
-    const long nodes = positive(vm, "nodes", 1, 100000);
-    const long ntasks = positive(vm, "ntasks", 2, 10000000);
-    if (ntasks < nodes)
-        throw ConfigError("--ntasks (" + std::to_string(ntasks) + ") must be at least --nodes (" +
-                          std::to_string(nodes) + ")");
-    const std::string time = vm.count("time") ? vm["time"].as<std::string>() : "1:00:00";
-    const long limit = parse_slurm_time("--time", time);
-    const long lead = positive(vm, "signal-lead", 120, 65535);
-    const long max_resubmits = vm.count("max-resubmits")
-                                   ? static_cast<long>(parse_seed(
-                                         "--max-resubmits", vm["max-resubmits"].as<std::string>()))
-                                   : 10;
-    if (max_resubmits > 10000)
+    j.nodes = positive(vm, "nodes", 1, 100000);
+    j.ntasks = positive(vm, "ntasks", 2, 10000000);
+    if (j.ntasks < j.nodes)
+        throw ConfigError("--ntasks (" + std::to_string(j.ntasks) + ") must be at least --nodes (" +
+                          std::to_string(j.nodes) + ")");
+    j.time = vm.count("time") ? vm["time"].as<std::string>() : "1:00:00";
+    j.limit = parse_slurm_time("--time", j.time);
+    j.lead = positive(vm, "signal-lead", 120, 65535);
+    j.max_resubmits = vm.count("max-resubmits")
+                          ? static_cast<long>(parse_seed("--max-resubmits",
+                                                         vm["max-resubmits"].as<std::string>()))
+                          : 10;
+    if (j.max_resubmits > 10000)
         throw ConfigError("--max-resubmits must be at most 10000, got " +
-                          std::to_string(max_resubmits));
-    double grace = 60.0;
+                          std::to_string(j.max_resubmits));
     if (vm.count("grace")) {
-        grace = parse_finite("--grace", vm["grace"].as<std::string>());
-        if (grace < 0) throw ConfigError("--grace must be >= 0");
+        j.grace = parse_finite("--grace", vm["grace"].as<std::string>());
+        if (j.grace < 0) throw ConfigError("--grace must be >= 0");
     }
-    if (lead >= limit)
-        throw ConfigError("--signal-lead (" + std::to_string(lead) +
-                          " s) must be shorter than --time (" + time + " = " +
-                          std::to_string(limit) + " s)");
-    if (grace >= static_cast<double>(lead))
-        throw ConfigError("--grace (" + std::to_string(static_cast<long>(grace)) +
-                          " s) must be shorter than --signal-lead (" + std::to_string(lead) +
+    if (j.lead >= j.limit)
+        throw ConfigError("--signal-lead (" + std::to_string(j.lead) +
+                          " s) must be shorter than --time (" + j.time + " = " +
+                          std::to_string(j.limit) + " s)");
+    if (j.grace >= static_cast<double>(j.lead))
+        throw ConfigError("--grace (" + std::to_string(static_cast<long>(j.grace)) +
+                          " s) must be shorter than --signal-lead (" + std::to_string(j.lead) +
                           " s), so that the drain ends before the limit");
-    const std::string launcher = vm.count("launcher") ? vm["launcher"].as<std::string>() : "srun";
-    if (launcher != "srun" && launcher != "mpirun" && launcher != "none")
-        throw ConfigError("--launcher must be srun, mpirun or none, got '" + launcher + "'");
-    std::string setup = "# (no --setup file)";
+    j.launcher = vm.count("launcher") ? vm["launcher"].as<std::string>() : "srun";
+    if (j.launcher != "srun" && j.launcher != "mpirun" && j.launcher != "none")
+        throw ConfigError("--launcher must be srun, mpirun or none, got '" + j.launcher + "'");
     if (vm.count("setup")) {
         const fs::path f = fs::absolute(vm["setup"].as<std::string>());
         if (!fs::is_regular_file(f))
             throw ConfigError("--setup file '" + f.string() + "' does not exist");
-        setup = "source " + quoted("--setup", f);
+        j.setup = "source " + quoted("--setup", f);
     }
-    const std::string job_name = slurm_name(
+    j.job_name = slurm_name(
         vm, "job-name",
         "hopper-" + (sweep.campaign.name.empty() ? std::string("campaign") : sweep.campaign.name));
-    if (!std::regex_match(job_name, std::regex("[A-Za-z0-9_.-]{1,64}")))
-        throw ConfigError("the campaign name makes a bad job name '" + job_name +
+    if (!std::regex_match(j.job_name, std::regex("[A-Za-z0-9_.-]{1,64}")))
+        throw ConfigError("the campaign name makes a bad job name '" + j.job_name +
                           "': give --job-name");
 
-    // Site options (issue 15).
+    return j;
+}
+
+// The site's options (issue 15): CPUs, memory, QOS, constraints, mail, extra sbatch and
+// launcher arguments.
+struct Site {
+    std::string cpus, mem, qos, constraint, mail_type, mail_user, sbatch_args, launcher_args;
+};
+
+Site read_site(const po::variables_map& vm, const std::string& launcher) {
+    Site site;
     auto matching = [&](const char* name, const std::regex& re, const std::string& allowed) {
         if (!vm.count(name)) return std::string();
         const std::string& text = vm[name].as<std::string>();
@@ -360,28 +369,27 @@ int submit_command(const std::vector<std::string>& args) {
                               "'");
         return text;
     };
-    const std::string cpus =
+    site.cpus =
         vm.count("cpus-per-task") ? std::to_string(positive(vm, "cpus-per-task", 1, 4096)) : "";
-    const std::string mem = matching("mem", std::regex("[0-9]{1,12}[KMGT]?"),
-                                     "a number with an optional unit K, M, G or T (e.g. 4G)");
-    const std::string qos = slurm_name(vm, "qos", "");
-    const std::string constraint =
-        matching("constraint", std::regex(R"([A-Za-z0-9_.&|,*\[\]:()]{1,256})"),
-                 "node features: letters, digits and _ . & | , * [ ] : ( )");
-    const std::string mail_type =
+    site.mem = matching("mem", std::regex("[0-9]{1,12}[KMGT]?"),
+                        "a number with an optional unit K, M, G or T (e.g. 4G)");
+    site.qos = slurm_name(vm, "qos", "");
+    site.constraint = matching("constraint", std::regex(R"([A-Za-z0-9_.&|,*\[\]:()]{1,256})"),
+                               "node features: letters, digits and _ . & | , * [ ] : ( )");
+    site.mail_type =
         matching("mail-type",
                  std::regex("((NONE|BEGIN|END|FAIL|REQUEUE|ALL|INVALID_DEPEND|STAGE_OUT|TIME_"
                             "LIMIT|TIME_LIMIT_90|TIME_LIMIT_80|TIME_LIMIT_50|ARRAY_TASKS),?)+"),
                  "a comma-separated list of NONE, BEGIN, END, FAIL, REQUEUE, ALL, "
                  "INVALID_DEPEND, STAGE_OUT, TIME_LIMIT, TIME_LIMIT_90, TIME_LIMIT_80, "
                  "TIME_LIMIT_50, ARRAY_TASKS");
-    const std::string mail_user =
+    site.mail_user =
         matching("mail-user", std::regex(R"([A-Za-z0-9._%+-]{1,64}(@[A-Za-z0-9.-]{1,190})?)"),
                  "a user name or e-mail address");
-    if (!mail_user.empty() && mail_type.empty())
+    if (!site.mail_user.empty() && site.mail_type.empty())
         std::cerr << "campaign: warning: --mail-user without --mail-type: Slurm mails only what "
                      "the site's default mail type says (give --mail-type END,FAIL, say)\n";
-    if (!mail_type.empty() && mail_user.empty())
+    if (!site.mail_type.empty() && site.mail_user.empty())
         std::cerr << "campaign: note: --mail-type without --mail-user: mail goes to the "
                      "submitting user\n";
     auto no_newline = [](const std::string& option, const std::string& a) {
@@ -391,7 +399,6 @@ int submit_command(const std::vector<std::string>& args) {
                               "newlines, got '" +
                               a + "'");
     };
-    std::string sbatch_args;
     if (vm.count("sbatch-arg"))
         for (const std::string& a : vm["sbatch-arg"].as<std::vector<std::string>>()) {
             no_newline("--sbatch-arg", a);
@@ -405,48 +412,67 @@ int submit_command(const std::vector<std::string>& args) {
                     throw ConfigError("--sbatch-arg '" + a +
                                       "' would override what the template needs (" + own +
                                       "); use the first-class option or --template");
-            sbatch_args += (sbatch_args.empty() ? "" : "\n#SBATCH ") + a;
+            site.sbatch_args += (site.sbatch_args.empty() ? "" : "\n#SBATCH ") + a;
         }
-    std::string launcher_args;
     if (vm.count("launcher-arg")) {
         for (const std::string& a : vm["launcher-arg"].as<std::vector<std::string>>()) {
             no_newline("--launcher-arg", a);
-            launcher_args += (launcher_args.empty() ? "'" : " '") + a + "'";
+            site.launcher_args += (site.launcher_args.empty() ? "'" : " '") + a + "'";
         }
         if (launcher == "none")
             std::cerr << "campaign: warning: --launcher-arg is ignored with --launcher none (no "
                          "launcher runs)\n";
     }
-    const std::string master_slot =
-        vm.count("master-slot") ? vm["master-slot"].as<std::string>() : "shared";
-    if (master_slot != "shared" && master_slot != "own")
-        throw ConfigError("--master-slot must be shared or own, got '" + master_slot + "'");
-    if (launcher == "none" && vm.count("master-slot"))
+    return site;
+}
+
+// Where the master runs and how many worker threads each process has: of the one process
+// (--launcher none; default --ntasks), or of every rank (hybrid; default 1, or --cpus-per-task).
+struct Workers {
+    std::string master_slot;
+    long threads = 1;
+    // Workers in all: what the cost estimate divides by.
+    long total(const Job& j) const {
+        const long ranks = master_slot == "shared" ? j.ntasks : j.ntasks - 1;
+        return std::max(1L, j.launcher == "none" ? threads : ranks * threads);
+    }
+};
+
+Workers read_workers(const po::variables_map& vm, const Job& j, const std::string& cpus) {
+    Workers w;
+    w.master_slot = vm.count("master-slot") ? vm["master-slot"].as<std::string>() : "shared";
+    if (w.master_slot != "shared" && w.master_slot != "own")
+        throw ConfigError("--master-slot must be shared or own, got '" + w.master_slot + "'");
+    if (j.launcher == "none" && vm.count("master-slot"))
         std::cerr << "campaign: warning: --master-slot is ignored with --launcher none (one "
                      "process: the master is a thread beside the worker threads)\n";
-    if (launcher != "none" && master_slot == "own" && ntasks < 2)
+    if (j.launcher != "none" && w.master_slot == "own" && j.ntasks < 2)
         throw ConfigError("--master-slot own needs --ntasks of at least 2 (1 master + workers)");
-    // Worker threads: of the one process (--launcher none; default --ntasks), or of every rank
-    // (hybrid; default 1, or --cpus-per-task when that is given).
     const long cpt = cpus.empty() ? 1 : std::stol(cpus);
-    long threads = launcher == "none" ? ntasks : cpt;
+    long& threads = w.threads;
+    threads = j.launcher == "none" ? j.ntasks : cpt;
     if (vm.count("threads")) threads = positive(vm, "threads", 1, 4096);
-    if (launcher != "none" && threads < cpt)
+    if (j.launcher != "none" && threads < cpt)
         std::cerr << "campaign: warning: --cpus-per-task " << cpt << " with " << threads
                   << " thread(s) per rank: " << (cpt - threads) << " of every " << cpt
                   << " CPUs stay idle (give --threads " << cpt << ")\n";
-    if (launcher != "none" && threads > cpt)
+    if (j.launcher != "none" && threads > cpt)
         std::cerr << "campaign: warning: --threads " << threads << " with --cpus-per-task " << cpt
                   << ": each rank runs " << threads << " realizations on " << cpt
                   << " CPU(s) (give --cpus-per-task " << threads << ")\n";
-    if (launcher == "none" && !cpus.empty())
+    if (j.launcher == "none" && !cpus.empty())
         std::cerr << "campaign: warning: --cpus-per-task is only an #SBATCH line with --launcher "
                      "none: the one process runs --threads workers\n";
-    if (launcher == "none" && ntasks > 1 && !vm.count("threads"))
-        std::cerr << "campaign: note: --launcher none: one process with " << ntasks
+    if (j.launcher == "none" && j.ntasks > 1 && !vm.count("threads"))
+        std::cerr << "campaign: note: --launcher none: one process with " << j.ntasks
                   << " worker threads (--ntasks)\n";
+    return w;
+}
+
+// The arguments the batch script gives `campaign run`: threads, checkpoints, deaths, deadline.
+std::string run_arguments(const po::variables_map& vm, const Job& j, const Workers& w) {
     std::string run_args;
-    if (launcher == "none" || threads > 1) run_args += "--threads " + std::to_string(threads);
+    if (j.launcher == "none" || w.threads > 1) run_args += "--threads " + std::to_string(w.threads);
     auto add_run = [&](const std::string& a) { run_args += (run_args.empty() ? "" : " ") + a; };
     if (vm["no-checkpoints"].as<bool>()) {
         if (vm.count("checkpoint-interval"))
@@ -478,101 +504,138 @@ int submit_command(const std::vector<std::string>& args) {
                 "time, or no time-aware dispatch), got '" +
                 d + "'");
         std::ostringstream t;
-        t << (static_cast<double>(lead) - grace);
+        t << (static_cast<double>(j.lead) - j.grace);
         add_run(d == "none" ? "--deadline none" : "--deadline slurm-" + t.str());
     }
 
+    return run_args;
+}
+
+// The batch template's values (slurm/README.md lists them).
+std::map<std::string, std::string> template_values(const po::variables_map& vm, const Job& j,
+                                                   const Site& site, const Workers& w,
+                                                   const std::string& run_args,
+                                                   const std::string& sweep_path) {
     std::ostringstream grace_text;
-    grace_text << grace;
-    const std::map<std::string, std::string> values{
-        {"JOB_NAME", job_name},
-        {"NODES", std::to_string(nodes)},
-        {"NTASKS", std::to_string(ntasks)},
-        {"TIME", time},
+    grace_text << j.grace;
+    return {
+        {"JOB_NAME", j.job_name},
+        {"NODES", std::to_string(j.nodes)},
+        {"NTASKS", std::to_string(j.ntasks)},
+        {"TIME", j.time},
         {"PARTITION", slurm_name(vm, "partition", "")},
         {"ACCOUNT", slurm_name(vm, "account", "")},
-        {"SIGNAL_LEAD", std::to_string(lead)},
-        {"LOG", log.string()},
+        {"SIGNAL_LEAD", std::to_string(j.lead)},
+        {"LOG", j.log.string()},
         {"CAMPAIGN", quoted("the campaign executable's path", self_executable())},
         {"SWEEP", quoted("the sweep file's path", fs::absolute(sweep_path).lexically_normal())},
-        {"STORE", quoted("the store's path", store)},
-        {"SCRIPT", quoted("the batch script's path", script)},
-        {"LAUNCHER", launcher},
+        {"STORE", quoted("the store's path", j.store)},
+        {"SCRIPT", quoted("the batch script's path", j.script)},
+        {"LAUNCHER", j.launcher},
         {"GRACE", grace_text.str()},
-        {"MAX_RESUBMITS", std::to_string(max_resubmits)},
-        {"SETUP", setup},
-        {"CPUS_PER_TASK", cpus},
-        {"MEM", mem},
-        {"QOS", qos},
-        {"CONSTRAINT", constraint},
-        {"MAIL_TYPE", mail_type},
-        {"MAIL_USER", mail_user},
+        {"MAX_RESUBMITS", std::to_string(j.max_resubmits)},
+        {"SETUP", j.setup},
+        {"CPUS_PER_TASK", site.cpus},
+        {"MEM", site.mem},
+        {"QOS", site.qos},
+        {"CONSTRAINT", site.constraint},
+        {"MAIL_TYPE", site.mail_type},
+        {"MAIL_USER", site.mail_user},
         {"EXCLUSIVE", vm["exclusive"].as<bool>() ? "--exclusive" : ""},
-        {"SBATCH_ARGS", sbatch_args},
-        {"LAUNCHER_ARGS", launcher_args},
-        {"MASTER_SLOT", master_slot},
+        {"SBATCH_ARGS", site.sbatch_args},
+        {"LAUNCHER_ARGS", site.launcher_args},
+        {"MASTER_SLOT", w.master_slot},
         {"RUN_ARGS", run_args},
     };
-    quoted("the log's path", log);  // #SBATCH --output= takes no quotes: no spaces either
-    if (log.string().find_first_of(" \t%") != std::string::npos)
-        throw ConfigError(
-            "the store's path must not contain spaces or '%' for Slurm's --output: '" +
-            log.string() + "'");
-    const std::string tmpl =
-        vm.count("template") ? read_file(vm["template"].as<std::string>()) : sbatch_template;
-    const std::string text = render_template(tmpl, values);
+}
 
-    if (vm["dry-run"].as<bool>()) {
-        std::cout << text;
-        std::cout.flush();
-        // What the batch job would run, and its cost (campaign run --dry-run), on stderr.
-        campaign::RunOptions ro;
-        ro.sweep = sweep_path;
-        ro.store = store;
-        const long workers = launcher == "none"
-                                 ? threads
-                                 : (master_slot == "shared" ? ntasks : ntasks - 1) * threads;
-        ro.threads = static_cast<int>(std::max(1L, workers));
-        std::ostringstream est;
-        campaign::DryRunTotals totals;
-        campaign::dry_run(ro, est, std::cerr, &totals);
-        std::cerr << est.str();
-        const Chain chain{1 + max_resubmits,
-                          limit,
-                          lead,
-                          std::max(1L, workers),
-                          ntasks,
-                          launcher == "none" ? 1 : threads,
-                          launcher != "none" && master_slot == "own"};
-        std::cerr << chain_warning(chain, totals.worker_seconds, totals.longest_seconds);
-        return 0;
-    }
+// --dry-run: the script on stdout; what the batch job would run and its cost (campaign run
+// --dry-run), and whether the chain of allocations can finish, on stderr.
+int print_dry_run(const std::string& text, const Job& j, const Workers& w,
+                  const std::string& sweep_path) {
+    std::cout << text;
+    std::cout.flush();
+    // What the batch job would run, and its cost (campaign run --dry-run), on stderr.
+    campaign::RunOptions ro;
+    ro.sweep = sweep_path;
+    ro.store = j.store;
+    const long workers = w.total(j);
+    ro.threads = static_cast<int>(workers);
+    std::ostringstream est;
+    campaign::DryRunTotals totals;
+    campaign::dry_run(ro, est, std::cerr, &totals);
+    std::cerr << est.str();
+    const Chain chain{1 + j.max_resubmits,
+                      j.limit,
+                      j.lead,
+                      workers,
+                      j.ntasks,
+                      j.launcher == "none" ? 1 : w.threads,
+                      j.launcher != "none" && w.master_slot == "own"};
+    std::cerr << chain_warning(chain, totals.worker_seconds, totals.longest_seconds);
+    return 0;
+}
+
+// Writes the script beside the store and hands it to sbatch.
+int submit_script(const std::string& text, const Job& j) {
     const fs::path sbatch = on_path("sbatch");
     if (sbatch.empty())
         throw std::runtime_error(
             "sbatch not found on PATH: submit on a Slurm login node, or use --dry-run to see the "
             "batch script (slurm/slurm-up.sh starts a single-node Slurm on this machine)");
-    fs::create_directories(store.parent_path());
+    fs::create_directories(j.store.parent_path());
     {
-        std::ofstream out(script, std::ios::trunc);
+        std::ofstream out(j.script, std::ios::trunc);
         out << text;
-        if (!out.flush()) throw std::runtime_error("cannot write '" + script.string() + "'");
+        if (!out.flush()) throw std::runtime_error("cannot write '" + j.script.string() + "'");
     }
-    fs::permissions(script, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
+    fs::permissions(j.script, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
     const auto [code, output] = run_capture(
-        {sbatch.string(), "--parsable", "--export=ALL,HOPPER_ALLOCATION=1", script.string()});
+        {sbatch.string(), "--parsable", "--export=ALL,HOPPER_ALLOCATION=1", j.script.string()});
     if (code != 0)
-        throw std::runtime_error("sbatch " + script.string() + " failed (exit " +
+        throw std::runtime_error("sbatch " + j.script.string() + " failed (exit " +
                                  std::to_string(code) + "): " + output);
     std::string job = output.substr(0, output.find_first_of(";\n"));
-    std::cout << "submitted job " << job << " (" << job_name << ", " << nodes << " node(s), "
-              << ntasks << " task(s), --time " << time << " per allocation, at most "
-              << max_resubmits << " resubmission(s))\n"
-              << "  script  " << script.string() << "\n"
-              << "  follow  squeue -u $USER -n " << job_name << "\n"
-              << "          tail -f " << log.string() << "\n"
-              << "          campaign status " << store.string() << "\n";
+    std::cout << "submitted job " << job << " (" << j.job_name << ", " << j.nodes << " node(s), "
+              << j.ntasks << " task(s), --time " << j.time << " per allocation, at most "
+              << j.max_resubmits << " resubmission(s))\n"
+              << "  script  " << j.script.string() << "\n"
+              << "  follow  squeue -u $USER -n " << j.job_name << "\n"
+              << "          tail -f " << j.log.string() << "\n"
+              << "          campaign status " << j.store.string() << "\n";
     return 0;
+}
+
+}  // namespace
+
+int submit_command(const std::vector<std::string>& args) {
+    const po::variables_map vm = parse_command(args, submit_options(), "sweep");
+    if (vm.count("help")) {
+        print_submit_help(std::cout);
+        return 0;
+    }
+    const std::string sweep_path = single_positional(vm, "sweep", "sweep file", "SWEEP.toml");
+
+    // The sweep file is checked here, on the login node, not in the queue.
+    const config::SweepFile sweep = config::load_sweep(sweep_path);
+    if (!sweep.has_campaign)
+        throw ConfigError("'" + sweep_path + "' has no [campaign] section: nothing to submit");
+    const Job j = read_job(vm, sweep);
+    const Site site = read_site(vm, j.launcher);
+    const Workers w = read_workers(vm, j, site.cpus);
+    const std::string run_args = run_arguments(vm, j, w);
+    quoted("the log's path", j.log);  // #SBATCH --output= takes no quotes: no spaces either
+    if (j.log.string().find_first_of(" \t%") != std::string::npos)
+        throw ConfigError(
+            "the store's path must not contain spaces or '%' for Slurm's --output: '" +
+            j.log.string() + "'");
+    const std::string tmpl =
+        vm.count("template") ? read_file(vm["template"].as<std::string>()) : sbatch_template;
+    const std::string text =
+        render_template(tmpl, template_values(vm, j, site, w, run_args, sweep_path));
+
+    if (vm["dry-run"].as<bool>()) return print_dry_run(text, j, w, sweep_path);
+    return submit_script(text, j);
 }
 
 namespace {
