@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.hpp"
 #include "hopper/engine/realization.hpp"
 #include "hopper/engine/system.hpp"
 
@@ -35,13 +36,8 @@ namespace {
     std::exit(2);
 }
 
-double number(const char* opt, const char* text, double lo, double hi) {
-    char* end = nullptr;
-    const double v = std::strtod(text, &end);
-    if (end == text || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
-        usage(std::string(opt) + " '" + text + "': expected a number in [" + std::to_string(lo) +
-              ", " + std::to_string(hi) + "]");
-    return v;
+double number(const std::string& opt, const char* text, double lo, double hi) {
+    return bench::number(opt, text, lo, hi, usage);
 }
 
 SceneParams silo(double D_over_d, double collision_time, double max_time, double mu_r,

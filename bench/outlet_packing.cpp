@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "bench_args.hpp"
 #include "hopper/core/units.hpp"
 #include "hopper/engine/realization.hpp"
 
@@ -38,12 +39,7 @@ namespace {
 }
 
 double number(const std::string& opt, const char* text, double lo, double hi) {
-    char* end = nullptr;
-    const double v = std::strtod(text, &end);
-    if (end == text || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
-        usage(opt + " '" + text + "': expected a number in [" + std::to_string(lo) + ", " +
-              std::to_string(hi) + "]");
-    return v;
+    return bench::number(opt, text, lo, hi, usage);
 }
 
 struct Region {

@@ -19,6 +19,7 @@
 #include <map>
 #include <string>
 
+#include "bench_args.hpp"
 #include "hopper/config/sweep.hpp"
 #include "hopper/engine/realization.hpp"
 #include "hopper/engine/system.hpp"
@@ -37,13 +38,8 @@ namespace {
     std::exit(2);
 }
 
-double number(const char* opt, const char* text, double lo, double hi) {
-    char* end = nullptr;
-    const double v = std::strtod(text, &end);
-    if (end == text || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
-        usage(std::string(opt) + " '" + text + "': expected a number in [" + std::to_string(lo) +
-              ", " + std::to_string(hi) + "]");
-    return v;
+double number(const std::string& opt, const char* text, double lo, double hi) {
+    return bench::number(opt, text, lo, hi, usage);
 }
 
 struct Tally {
