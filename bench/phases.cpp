@@ -33,7 +33,7 @@ namespace {
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
                  "bench_phases: %s\nusage: bench_phases SWEEP.toml --D CM --theta DEG --seed N "
-                 "[--kernel reference|baseline|avx2|avx512|automatic] [--interval S]\n",
+                 "[--kernel auto|reference|baseline|avx2|avx512] [--interval S]\n",
                  why.c_str());
     std::exit(2);
 }
@@ -87,14 +87,11 @@ int main(int argc, char** argv) {
         } else if (a == "--interval") {
             interval = number("--interval", v, 1e-6, 1);
         } else if (a == "--kernel") {
-            const std::string k = v;
-            kernel = k == "reference"  ? KernelPath::reference
-                     : k == "baseline" ? KernelPath::baseline
-                     : k == "avx2"     ? KernelPath::avx2
-                     : k == "avx512"   ? KernelPath::avx512
-                     : k == "automatic"
-                         ? KernelPath::automatic
-                         : (usage("--kernel '" + k + "': not a force path"), KernelPath::automatic);
+            try {
+                kernel = parse_kernel_path(v);
+            } catch (const std::exception& e) {
+                usage(e.what());
+            }
         } else {
             usage("unknown option " + a);
         }
