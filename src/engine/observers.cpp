@@ -53,12 +53,16 @@ void IdTable::remember(int id, double m, double d, double I) {
 JamDetector::JamDetector(const SceneParams& p)
     : y_outlet(edge_disk_centre(p.hopper).y()),
       half_gap(outlet_free_gap(p.hopper) / 2),
-      y_region(y_outlet - p.protocol.jam_region_height * p.particles.d_large) {}
+      y_region(y_outlet - p.protocol.jam_region_height * p.particles.d_large),
+      min_speed2(p.protocol.jam_min_speed * p.protocol.jam_min_speed * p.gravity *
+                 p.particles.d_large) {}
 
 bool JamDetector::occupied(const System& s) const {
-    const auto x = s.x(), y = s.y();
+    const auto x = s.x(), y = s.y(), vx = s.vx(), vy = s.vy();
     for (std::size_t i = 0; i < x.size(); ++i)
-        if (y[i] < y_outlet && y[i] > y_region && std::abs(x[i]) < half_gap) return true;
+        if (y[i] < y_outlet && y[i] > y_region && std::abs(x[i]) < half_gap &&
+            vx[i] * vx[i] + vy[i] * vy[i] >= min_speed2)
+            return true;
     return false;
 }
 

@@ -39,7 +39,8 @@ class JamDetector {
 
     explicit JamDetector(const SceneParams& p);
 
-    // Particles inside |x| < half_gap, y_region < y < y_outlet.
+    // A particle inside |x| < half_gap, y_region < y < y_outlet moving at least min_speed
+    // (docs/model.md, step 4: one lodged there at rest is part of the clog, not of the flow).
     bool occupied(const System& s) const;
     // One look at the region: while flowing, `jammed` once it has been empty for t_check
     // (the jam's onset is last_occupied; [onset, td) is appended to `jammed`); after a
@@ -49,6 +50,7 @@ class JamDetector {
 
     // The region: below the edge disks (y_outlet = 0, half_gap = D/2 in the default geometry).
     double y_outlet = 0.0, half_gap = 0.0, y_region = 0.0;
+    double min_speed2 = 0.0;  // (m/s)^2; 0: every particle in the region counts
     Flow flow = Flow::flowing;
     double flow_start = 0.0;     // td at which the current survival interval began
     double last_occupied = 0.0;  // td at which the region last held a particle

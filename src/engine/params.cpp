@@ -249,6 +249,7 @@ void validate_detection_and_fields(const SceneParams& p) {
     require_range("protocol.settle_hold", pr.settle_hold, 0.0, 100.0, true, " s");
     require_range("protocol.settle_max_time", pr.settle_max_time, 0.0, 1e5, true, " s");
     require_range("protocol.jam_region_height", pr.jam_region_height, 0.0, 100.0, true);
+    require_range("protocol.jam_min_speed", pr.jam_min_speed, 0.0, 10.0, false);
     if (pr.t_check) require_range("protocol.t_check", *pr.t_check, 0.0, 100.0, true, " s");
     require_range("protocol.detector_interval", pr.detector_interval, 0.0, 1.0, true, " s");
     const auto& f = p.fields;

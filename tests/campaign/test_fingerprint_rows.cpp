@@ -178,6 +178,9 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
     // The rolling law (issue 39): only off its default, the constant torque.
     if (p.material.rolling_law != d.material.rolling_law)
         l.add("material.rolling_law", engine::to_string(p.material.rolling_law));
+    // The jam detector's speed floor (issue 39): only off its default.
+    if (q.jam_min_speed != d.protocol.jam_min_speed)
+        l.add("protocol.jam_min_speed", q.jam_min_speed);
     return l.take();
 }
 

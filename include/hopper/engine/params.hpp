@@ -181,6 +181,10 @@ struct ProtocolParams {
     double settle_max_time = 20.0;  // s
     // Jam detection: region |x| < D/2, -jam_region_height < y < 0 (units of d_large).
     double jam_region_height = 2.0;
+    // A disk in the region counts only while its speed is at least jam_min_speed sqrt(g d_large)
+    // (issue 39: a disk lodged there at rest hid a stopped flow). 0: every disk counts, the
+    // detector of 0.4.0 and earlier.
+    double jam_min_speed = 0.01;
     std::optional<double> t_check;    // s; unset = 2 sqrt(d_large / g)
     double detector_interval = 1e-4;  // s between looks at the region
     // Unjamming: one sinusoidal oscillation of the whole hopper per shake.
