@@ -67,12 +67,17 @@ CANDIDATES = {
 
 
 # The paper studies' model since issue 39 (docs/validation.md, "Medium-wide walls with mu_r
-# 0.02"): the calibration's medium-wide walls in place of CALIBRATED's, which match the small
-# outlets' empty times, and the rolling spring, which gives the clogging the published level and
-# slope with them. The calibration targets' twins above keep issue 11's CALIBRATED walls: their
-# stores and tables are that calibration's.
+# 0.02" and "Smoother walls, spacing 0.6"): the free gap of the calibration's medium-wide walls,
+# which the small outlets' empty times ask for, on walls a little smoother than theirs, and the
+# rolling spring, which gives the clogging the published level and slope with that gap. The
+# calibration targets' twins above keep issue 11's CALIBRATED walls: their stores and tables
+# are that calibration's.
 CLOGGING = {
-    "walls": CANDIDATES["medium-wide"]["walls"],
+    "walls": [
+        ("spacing", "0.6", "nearly smooth walls: wall disks overlapping by 0.4 of a diameter"),
+        ("edge_offset", "0.35",
+         "the walls' rounded lower ends sit 0.35 wall diameters up the wall from the outlet corner"),
+    ],
     "material": [
         ("mu_r", "0.02", "rolling resistance, about the contact's width over the radius of soft disks"),
         ("rolling_law", '"spring"', "a rolling spring capped at mu_r R* |F_n|, so that a clog holds"),
