@@ -403,11 +403,10 @@ std::map<std::string, std::string> settings_of(const std::string& text) {
 TEST(ShippedCampaigns, CalibratedTwinsDifferOnlyInTheCalibratedChoices) {
     namespace fs = std::filesystem;
     const fs::path root = HOPPER_SOURCE_DIR;
-    // The calibrated model, as it appears in a point's physics text; the paper studies also
-    // have issue 23's growing shakes (the frozen 2026-11 copies, for stores made before them,
-    // do not).
-    // Since issue 39 the paper studies take a wider free gap and the rolling spring
-    // (clogging); the frozen 2026-12 copies keep the calibrated walls with the growing shakes.
+    // The choices as they appear in a point's physics text: the calibration targets' twins and
+    // the frozen 2026-11 copies have issue 11's calibrated walls; the frozen 2026-12 copies add
+    // issue 23's growing shakes (unjamming); the paper studies since issue 39 take the wider
+    // free gap and the rolling spring with those shakes (clogging).
     using Choices = std::map<std::string, std::string>;
     const Choices calibrated = {{"hopper.wall_spacing", "0.5"}, {"hopper.edge_offset", "0.15"}};
     const Choices shakes = {{"protocol.shake_growth", "1.5"},
