@@ -63,6 +63,10 @@ struct CorrectArgs {
     // Plate friction (SystemConfig::plate_decel; 0: none): added to the forces of a block before
     // its correction, from the velocities it is corrected from.
     double plate_decel = 0.0, plate_speed = 0.0;
+    // The load band (SystemConfig::load_accel; 0: none): likewise, from the positions the block
+    // is corrected from.
+    double load_accel = 0.0, load_y_lo = 0.0, load_y_hi = 0.0;
+    bool body_forces() const { return plate_decel > 0.0 || load_accel > 0.0; }
 };
 
 // Adds the plate friction -m a v / max(|v|, v_c) to the forces of the particles [i0, i1)
@@ -76,6 +80,22 @@ inline void add_plate_friction(const CorrectArgs& c, double* fx, double* fy, int
         fx[i] -= k * vx;
         fy[i] -= k * vy;
     }
+}
+
+// Adds the load band's m a_load downward to the forces of the particles [i0, i1) whose centres
+// lie in [load_y_lo, load_y_hi] (docs/model.md, "The lid").
+inline void add_load_band(const CorrectArgs& c, double* fy, int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+        const double y = c.y[i];
+        if (y >= c.load_y_lo && y <= c.load_y_hi) fy[i] -= c.load_accel / c.inv_m[i];
+    }
+}
+
+// The forces that are not contacts, in one order for every path: the plate friction, then the
+// load band.
+inline void add_body_forces(const CorrectArgs& c, double* fx, double* fy, int i0, int i1) {
+    if (c.plate_decel > 0.0) add_plate_friction(c, fx, fy, i0, i1);
+    if (c.load_accel > 0.0) add_load_band(c, fy, i0, i1);
 }
 
 // The corrector over the particles [i0, i1), whose forces (and torques when rot) are final:

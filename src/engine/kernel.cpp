@@ -260,10 +260,10 @@ struct KernelImpl final : System::Kernel {
         const std::size_t n = s.x_.size();
         const double dt = s.config_.dt;
         const double gx = s.config_.gravity.x(), gy = s.config_.gravity.y();
-        if (s.config_.plate_decel > 0.0) {
+        if (s.config_.plate_decel > 0.0 || s.config_.load_accel > 0.0) {
             detail::CorrectArgs c;
             correct_args(s, c, false);
-            detail::add_plate_friction(c, s.fx_.data(), s.fy_.data(), 0, int(n));
+            detail::add_body_forces(c, s.fx_.data(), s.fy_.data(), 0, int(n));
         }
         if constexpr (S == Scheme::gear4) {
             gear_correct_axis(n, dt, gx, s.fx_.data(), s.inv_m_.data(), s.x_.data(), s.vx_.data(),
@@ -342,6 +342,9 @@ struct KernelImpl final : System::Kernel {
         c.next_displacement = s.fusion_ == StepFusion::step;
         c.plate_decel = s.config_.plate_decel;
         c.plate_speed = s.config_.plate_speed;
+        c.load_accel = s.config_.load_accel;
+        c.load_y_lo = s.config_.load_y_lo;
+        c.load_y_hi = s.config_.load_y_hi;
         c.xref = s.xref_.data();
         c.yref = s.yref_.data();
         if (predict) {
@@ -379,7 +382,7 @@ double detail::correct_block(const CorrectArgs& c, double* fx, double* fy, const
                              bool rot, int i0, int i1) {
     const std::size_t n = i1 > i0 ? std::size_t(i1 - i0) : 0;
     if (n == 0 || c.scheme == CorrectArgs::none) return 0.0;
-    if (c.plate_decel > 0.0) add_plate_friction(c, fx, fy, i0, i1);
+    if (c.body_forces()) add_body_forces(c, fx, fy, i0, i1);
     double next = 0.0;
     if (c.scheme == CorrectArgs::gear4) {
         if (c.next_displacement) {

@@ -250,6 +250,8 @@ void validate_detection_and_fields(const SceneParams& p) {
     require_range("protocol.settle_max_time", pr.settle_max_time, 0.0, 1e5, true, " s");
     require_range("protocol.jam_region_height", pr.jam_region_height, 0.0, 100.0, true);
     require_range("protocol.jam_min_speed", pr.jam_min_speed, 0.0, 10.0, false);
+    require_range("protocol.lid_gravity", pr.lid_gravity, 0.0, 1000.0, false);
+    require_range("protocol.lid_depth", pr.lid_depth, 0.0, 100.0, true);
     if (pr.t_check) require_range("protocol.t_check", *pr.t_check, 0.0, 100.0, true, " s");
     require_range("protocol.detector_interval", pr.detector_interval, 0.0, 1.0, true, " s");
     const auto& f = p.fields;
@@ -346,6 +348,10 @@ void validate_law_choices(const SceneParams& p) {
             "parameter protocol.jams_per_realization = " + std::to_string(pr.jams_per_realization) +
             " needs protocol.mode = steady_state (the published protocol runs "
             "until the hopper is empty); allowed with mode = published: 0");
+    if (pr.mode == ProtocolMode::published && pr.lid_gravity != 0.0)
+        throw ConfigError("parameter protocol.lid_gravity = " + std::to_string(pr.lid_gravity) +
+                          " needs protocol.mode = steady_state (the lid rests on a head the "
+                          "re-insertion keeps constant); allowed with mode = published: 0");
 }
 
 }  // namespace

@@ -94,9 +94,20 @@ void Realization::Impl::open() {
     td = det.flow_start = det.last_occupied = 0.0;
     interval_base = left_count();
     reinserter.set_base(*sys, det.y_outlet);
+    put_lid();
     log(Event::Kind::opened);
     sample_curve();
     if (p.fields.enabled) fields.start(p, c.dt, wall_top, outline);
+}
+
+// The lid (docs/model.md, "The lid"; steady state only, validate_scene): the disks between 1 and
+// 1 + lid_depth large diameters below the insertion height weigh 1 + lid_gravity times as much.
+// The band follows from insert_base, so a restored state puts it back (restore_state).
+void Realization::Impl::put_lid() {
+    if (!(p.protocol.lid_gravity > 0.0)) return;
+    const double d = p.particles.d_large, top = reinserter.insert_base;
+    sys->set_load_band(top - (1.0 + p.protocol.lid_depth) * d, top - d,
+                       p.protocol.lid_gravity * p.gravity);
 }
 
 // ----- the discharge (steps 3-9) ----------------------------------------------------------

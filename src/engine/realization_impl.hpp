@@ -101,6 +101,7 @@ struct Realization::Impl : detail::Setup, detail::ProtocolState {
     void put_fingerprint(StateWriter& w) const;
     void check_fingerprint(StateReader& r) const;
     void remember_reinserted();
+    void put_lid();  // the lid's load band, from the insertion height (protocol.cpp)
 };
 
 }  // namespace hopper::engine

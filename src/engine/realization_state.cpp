@@ -106,6 +106,7 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
     restore_result(res, r, version);
     CheckpointAccess::restore(*sys, r);
     remember_reinserted();
+    if (phase != Phase::settle) put_lid();
     fields.acc.reset();
     if (r.get<std::uint8_t>()) {
         if (!p.fields.enabled) StateReader::fail();

@@ -174,6 +174,12 @@ void System::set_wall_motion(const Vec2& offset, const Vec2& velocity) {
     wall_velocity_ = velocity;
 }
 
+void System::set_load_band(double y_lo, double y_hi, double accel) {
+    config_.load_y_lo = y_lo;
+    config_.load_y_hi = y_hi;
+    config_.load_accel = accel;
+}
+
 void System::set_removal_floor(double y) {
     removal_floor_ = y;
 }

@@ -181,6 +181,11 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
     // The jam detector's speed floor (issue 39): only off its default.
     if (q.jam_min_speed != d.protocol.jam_min_speed)
         l.add("protocol.jam_min_speed", q.jam_min_speed);
+    // The lid (issue 40): only with a lid, and then with its depth.
+    if (q.lid_gravity != d.protocol.lid_gravity) {
+        l.add("protocol.lid_gravity", q.lid_gravity);
+        l.add("protocol.lid_depth", q.lid_depth);
+    }
     return l.take();
 }
 
@@ -202,6 +207,10 @@ void context(const std::string& name, engine::SceneParams& p) {
     if (name.rfind("fields.", 0) == 0 && name != "fields.enabled") p.fields.enabled = true;
     if (name == "fields.kernel_width_dlarge") p.fields.kernel = engine::FieldKernel::gaussian;
     if (name == "material.rolling_law") p.material.mu_r = 0.05;
+    if (name == "protocol.lid_gravity" || name == "protocol.lid_depth") {
+        p.protocol.mode = engine::ProtocolMode::steady_state;
+        if (name == "protocol.lid_depth") p.protocol.lid_gravity = 10.0;
+    }
 }
 
 // Values to try for a row, other than the current one: within the row's range first.

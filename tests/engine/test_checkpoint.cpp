@@ -94,6 +94,8 @@ struct Case {
     bool steady_corrected = false;
     // Issue 39: rolling resistance as a spring (a third history column in the state).
     bool rolling_spring = false;
+    // Issue 40: the steady state's lid (a load band the restored state must put back).
+    bool lid = false;
 };
 
 void PrintTo(const Case& c, std::ostream* os) {
@@ -110,6 +112,7 @@ TEST_P(CheckpointResume, StoppedAtRandomStepsAndResumedEndsBitIdentical) {
         p.protocol.mode = ProtocolMode::steady_state;
         p.protocol.jams_per_realization = 3;
     }
+    if (c.lid) p.protocol.lid_gravity = 5.0;
     if (c.rolling_spring) {
         p.material.mu_r = 0.05;
         p.material.rolling_law = RollingLaw::spring;
@@ -173,7 +176,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"gear4_steady_corrected", Scheme::gear4, false, 1, true},
                       Case{"verlet_steady_corrected", Scheme::verlet, false, 2, true},
                       Case{"gear4_rolling_spring", Scheme::gear4, false, 2, false, true},
-                      Case{"verlet_steady_rolling_spring", Scheme::verlet, false, 1, true, true}),
+                      Case{"verlet_steady_rolling_spring", Scheme::verlet, false, 1, true, true},
+                      Case{"gear4_steady_lid", Scheme::gear4, false, 1, true, false, true}),
     [](const ::testing::TestParamInfo<Case>& i) { return std::string(i.param.name); });
 
 // The checkpoint format is a promise to the files users have: a state written by an earlier

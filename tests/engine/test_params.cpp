@@ -216,4 +216,19 @@ TEST(Params, ValidateRejectsMoreJamsThanARefillAllows) {
     EXPECT_NO_THROW(validate_scene(sp));
 }
 
+// The lid (issue 40) rests on the steady state's constant head: the published protocol, which
+// empties the hopper, refuses it by name; its load and depth have ranges of their own.
+TEST(Params, ValidateRejectsALidOutsideTheSteadyStateOrOutOfRange) {
+    SceneParams sp;
+    sp.protocol.lid_gravity = 5.0;
+    expect_rejected(sp, {"protocol.lid_gravity", "steady_state"});
+    sp.protocol.mode = ProtocolMode::steady_state;
+    EXPECT_NO_THROW(validate_scene(sp));
+    sp.protocol.lid_gravity = -1.0;
+    expect_rejected(sp, {"protocol.lid_gravity", "[0, 1000]"});
+    sp.protocol.lid_gravity = 5.0;
+    sp.protocol.lid_depth = 0.0;
+    expect_rejected(sp, {"protocol.lid_depth", "(0, 100]"});
+}
+
 }  // namespace

@@ -212,6 +212,12 @@ struct ProtocolParams {
     // What clears a jam (issue 26). With remove_arch, max_shakes bounds the arch removals of
     // one jam and the shake settings play no part.
     UnjamMode unjam = UnjamMode::shake;
+    // The lid (issue 40; steady state only): while the hopper discharges, the disks whose centres
+    // lie between 1 and 1 + lid_depth large diameters below the packing's top (the steady
+    // state's insertion height) weigh 1 + lid_gravity times their weight: a weighted layer of
+    // free disks that stands in for the column a small head lacks. 0: no lid.
+    double lid_gravity = 0.0;
+    double lid_depth = 3.0;  // in units of d_large
 };
 
 struct SceneParams {

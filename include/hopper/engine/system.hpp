@@ -78,6 +78,11 @@ struct SystemConfig {
     // flop of the step is spent on it).
     double plate_decel = 0.0;   // m/s^2
     double plate_speed = 0.01;  // m/s
+    // A load band (the steady state's lid, docs/model.md "The lid"): each mobile disk whose
+    // centre lies in [load_y_lo, load_y_hi] feels a further m load_accel downward; 0 = none
+    // (and not a flop of the step is spent on it). Set with System::set_load_band.
+    double load_accel = 0.0;                  // m/s^2
+    double load_y_lo = 0.0, load_y_hi = 0.0;  // m
 };
 
 // A particle that left through the removal floor.
@@ -104,6 +109,9 @@ class System {
     int add_wall(const Vec2& pos, double diameter);
     // Removes wall particles by id (e.g. the gate that closes the outlet while settling).
     void remove_walls(std::span<const int> ids);
+    // The load band of SystemConfig (load_accel, load_y_lo, load_y_hi) from the next step on;
+    // accel 0 takes it off.
+    void set_load_band(double y_lo, double y_hi, double accel);
     // Rigid translation of all walls: positions are base + offset, velocity is shared.
     void set_wall_motion(const Vec2& offset, const Vec2& velocity);
     // Mobile particles whose centre falls below this height are removed at the next neighbour
