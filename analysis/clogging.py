@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Tables of issue 23 (docs/clogging.md): arrests and the growing shakes, the head scan.
+"""Tables of issue 23 (docs/clogging.md): arrests and the growing shakes, the head scan, the lid.
 
 usage:
   clogging.py arrests STORE.h5 [--json OUT]
@@ -37,6 +37,14 @@ usage:
       work, independent of the machine's load) and, where a point's CPU cost per particle-step
       is given, core-seconds per jam; each steady-state point against the published protocol
       (z = difference over the combined standard error)
+  clogging.py heads - STEADY.h5 --reference TAU,TAU_SE,S,S_SE,JAMS [...]
+      the same against a published side given as numbers (docs/clogging.md quotes them) when its
+      store is not at hand
+  clogging.py lid-stress STORE.h5 [--half-width 0.03] [--height 0.05] [--json OUT]
+      per point of a store with fields: the mean coarse-grained pressure (units of m g) in the
+      cells within the half-width (m) of the axis and between the outlet and the height (m)
+      above it, with the discharge rate and the jams: the stress a lid must restore (issue 40;
+      campaigns/open-question/lid-stress.toml)
 
 Both read a store with analysis/hopper_store.py (h5py). tau is the censored exponential MLE
 (total observed time over jams) with the chi-square 95 % interval, as `campaign analyze`
@@ -266,12 +274,33 @@ def point_rows(path, ns_by_label):
     return rows
 
 
-def heads(published, steady, ns_args, out):
+def reference_row(text):
+    """A published reference given as numbers, "TAU,TAU_SE,S,S_SE,JAMS" (s, s, grains, grains,
+    count): for when the published store is not at hand (docs/clogging.md quotes them)."""
+    try:
+        tau, tau_se, s_mean, s_se, jams = (float(v) for v in text.split(","))
+    except ValueError:
+        sys.exit("clogging.py heads: --reference takes TAU,TAU_SE,S,S_SE,JAMS (five numbers), "
+                 "got %r" % text)
+    if min(tau, tau_se, s_mean, s_se, jams) <= 0:
+        sys.exit("clogging.py heads: --reference: every number must be positive, got %r" % text)
+    k = int(round(jams))
+
+    def given(mean, se):  # the censored MLE's chi-square interval for k jams
+        return {"jams": k, "total": mean * k, "mean": mean, "se": se,
+                "lo": 2 * mean * k / stats.chi2.ppf(0.975, 2 * k),
+                "hi": 2 * mean * k / stats.chi2.ppf(0.025, 2 * k)}
+    return {"store": "--reference", "label": "published (given)", "particles": 0,
+            "realizations": 0, "particle_steps_per_jam": None,
+            "tau": given(tau, tau_se), "mean_s": given(s_mean, s_se)}
+
+
+def heads(published, steady, ns_args, out, reference=None):
     ns_by_label = {}
     for a in ns_args or []:
         label, _, ns = a.rpartition("=")
         ns_by_label[label] = float(ns)
-    ref = point_rows(published, ns_by_label)
+    ref = [reference_row(reference)] if reference else point_rows(published, ns_by_label)
     rows = point_rows(steady, ns_by_label)
     if len(ref) != 1:
         sys.exit("clogging.py heads: the published store must hold one point, it has %d" % len(ref))
@@ -293,6 +322,45 @@ def heads(published, steady, ns_args, out):
     if out:
         with open(out, "w") as fh:
             json.dump({"published": ref, "steady_state": rows}, fh, indent=1)
+
+
+def lid_stress_summary(s, half_width, height):
+    """The mean coarse-grained pressure (m g) in the field cells whose centres lie within
+    `half_width` of the axis and between the outlet and `height` above it, per point, with the
+    point's discharge rate: the stress a lid must restore (docs/clogging.md). Cells no window
+    reached are left out; ValueError when the store has no fields."""
+    fields = s.fields()
+    if not fields:
+        raise ValueError("no fields (its sweep needs [fields] enabled = true)")
+    r = s.realizations
+    rows = []
+    for label, ds in fields.items():
+        sel = (abs(ds.x) < half_width) & (ds.y > 0) & (ds.y < height)
+        p = ds["mean_pressure"].where(sel)
+        rr = r[(r["label"] == label) & r["status"].isin(["complete", "time_limit"])]
+        rows.append({"label": label, "pressure": float(p.mean()),
+                     "cells": int(p.notnull().sum()),
+                     "discharge_rate": float(rr["discharge_rate"].mean()) if len(rr) else None,
+                     "jams": int(rr["n_jams"].sum())})
+    return rows
+
+
+def lid_stress(path, half_width, height, out):
+    with open_store(path) as s:
+        try:
+            rows = lid_stress_summary(s, half_width, height)
+        except ValueError as e:
+            sys.exit("clogging.py lid-stress: %s: %s" % (path, e))
+    print("pressure above the outlet (|x| < %.3g m, 0 < y < %.3g m), units of m g" %
+          (half_width, height))
+    print("%-70s %9s %6s %10s %5s" % ("point", "pressure", "cells", "rate (1/s)", "jams"))
+    for row in rows:
+        print("%-70s %9.1f %6d %10s %5d" % (row["label"][:70], row["pressure"], row["cells"],
+                                             "%.0f" % row["discharge_rate"]
+                                             if row["discharge_rate"] else "-", row["jams"]))
+    if out:
+        with open(out, "w") as fh:
+            json.dump(rows, fh, indent=1)
 
 
 def fill_levels(s, bins):
@@ -816,7 +884,15 @@ def main():
     h.add_argument("published")
     h.add_argument("steady")
     h.add_argument("--ns-per-particle-step", nargs="*", metavar="LABEL=NS")
+    h.add_argument("--reference", metavar="TAU,TAU_SE,S,S_SE,JAMS",
+                   help="the published side as numbers instead of the store (give the store's "
+                   "argument as -)")
     h.add_argument("--json")
+    ls = sub.add_parser("lid-stress")
+    ls.add_argument("store")
+    ls.add_argument("--half-width", type=float, default=0.03, help="m (default %(default)s)")
+    ls.add_argument("--height", type=float, default=0.05, help="m (default %(default)s)")
+    ls.add_argument("--json")
     lv = sub.add_parser("levels")
     lv.add_argument("store")
     lv.add_argument("--bins", default="0,300,700,1500,3000,5000,9000",
@@ -850,6 +926,8 @@ def main():
     args = ap.parse_args()
     for p in [getattr(args, k) for k in ("store", "published", "steady") if hasattr(args, k)] + \
             list(getattr(args, "stores", [])):
+        if p == "-" and getattr(args, "reference", None):
+            continue
         if not os.path.exists(p):
             sys.exit("clogging.py: no such store: %s" % p)
     if args.cmd == "arrests":
@@ -886,8 +964,12 @@ def main():
             sys.exit("clogging.py levels: --bins must be two or more increasing edges, got %r"
                      % args.bins)
         levels(args.store, bins, args.json)
+    elif args.cmd == "lid-stress":
+        if not (args.half_width > 0 and args.height > 0):
+            sys.exit("clogging.py lid-stress: --half-width and --height must be positive")
+        lid_stress(args.store, args.half_width, args.height, args.json)
     else:
-        heads(args.published, args.steady, args.ns_per_particle_step, args.json)
+        heads(args.published, args.steady, args.ns_per_particle_step, args.json, args.reference)
 
 
 if __name__ == "__main__":

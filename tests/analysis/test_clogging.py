@@ -15,8 +15,9 @@ import os
 import sys
 
 try:
+    import numpy as np
     import pandas as pd
-    import scipy  # noqa: F401
+    from scipy import stats
 except ImportError:
     sys.exit(77)
 
@@ -262,5 +263,49 @@ check(pb["combined"]["outlets"] == 2 and abs(pb["combined"]["deviance"] - dev) <
       "combined: %s (deviance by hand %.6g)" % (pb["combined"], dev))
 check("| synthetic | 2.7 | 1 | 10 | 100 |" in clogging.published_markdown([pb]),
       "published markdown:\n%s" % clogging.published_markdown([pb]))
+
+# heads --reference: the published side as numbers; its 95 % interval is the censored MLE's
+# chi-square interval for that many jams (here 100 jams of tau 5 s: 500 s of flow).
+ref = clogging.reference_row("5,0.5,1000,100,100")
+lo = 2 * 500 / stats.chi2.ppf(0.975, 200)
+check(ref["tau"]["mean"] == 5 and ref["tau"]["se"] == 0.5 and ref["tau"]["jams"] == 100
+      and abs(ref["tau"]["lo"] - lo) < 1e-12 and ref["mean_s"]["mean"] == 1000
+      and ref["mean_s"]["se"] == 100, "reference row: %s (lo by hand %.6g)" % (ref, lo))
+# a head whose tau is 6 +- 0.5 s lies (6 - 5) / hypot(0.5, 0.5) = 1.414 se above it
+check(abs(clogging.z_of({"mean": 6.0, "se": 0.5}, ref["tau"]) - 2 ** 0.5) < 1e-12, "z of a head")
+for bad in ("5,0.5,1000,100", "5,0.5,x,100,100", "5,0,1000,100,100"):
+    try:
+        clogging.reference_row(bad)
+        check(False, "reference %r accepted" % bad)
+    except SystemExit as e:
+        check("--reference" in str(e), "reference %r: %s" % (bad, e))
+
+# lid-stress: the mean pressure over the cells within the half-width of the axis and between the
+# outlet and the height; a cell no window reached (NaN) is left out. Cells of 1 cm: centres at
+# x = -2.5 ... 2.5 cm, y = -0.5 ... 6.5 cm; pressure = 10 + 100 y (m) + x (m) by hand.
+import xarray as xr  # noqa: E402
+xs = np.arange(-2.5, 2.6, 1.0) / 100
+ys = np.arange(-0.5, 6.6, 1.0) / 100
+pressure = 10 + 100 * ys[:, None] + xs[None, :]
+pressure[1, 2] = np.nan  # the cell at y = 0.5 cm, x = -0.5 cm: no window
+fields = {"D_cm=3.1": xr.Dataset({"mean_pressure": (("y", "x"), pressure)},
+                                 coords={"x": xs, "y": ys})}
+lid_store = Store.from_frames("synthetic", {
+    "realizations": pd.DataFrame({"point": [0, 0], "label": ["D_cm=3.1"] * 2,
+                                  "status": ["time_limit", "failed"], "n_jams": [2, 5],
+                                  "discharge_rate": [300.0, 1.0]})}, fields=fields)
+rows = clogging.lid_stress_summary(lid_store, 0.02, 0.03)
+# |x| < 2 cm: x = -1.5, -0.5, 0.5, 1.5 cm; 0 < y < 3 cm: y = 0.5, 1.5, 2.5 cm; one cell missing
+want = [10 + 100 * y + x for y in ys[1:4] for x in xs[1:5]
+        if not (y == ys[1] and x == xs[2])]
+check(len(rows) == 1 and rows[0]["cells"] == 11 and abs(rows[0]["pressure"] - np.mean(want)) < 1e-12
+      and rows[0]["discharge_rate"] == 300.0 and rows[0]["jams"] == 2,
+      "lid stress: %s (by hand %.6g over 11 cells)" % (rows, np.mean(want)))
+try:
+    clogging.lid_stress_summary(Store.from_frames("synthetic", {"realizations": pd.DataFrame()}),
+                                0.02, 0.03)
+    check(False, "a store without fields accepted")
+except ValueError as e:
+    check("fields" in str(e), "no fields: %s" % e)
 
 check.finish()
