@@ -77,6 +77,20 @@ inline int add_disk(System& s, const Vec2& pos, double d, const Vec2& vel = Vec2
     return s.add_particle(pos, d, disk_mass(d), disk_inertia(d), vel, omega);
 }
 
+// A pile of 30 large disks with sideways speeds dropped into a box of wall disks (a floor at
+// y = -5 mm, x within 10 cm), run for 8000 steps: the scene of the body forces' same-bits tests.
+// Returns the number of contacts at the end (the pile must have landed).
+inline std::size_t drop_pile(System& s) {
+    for (double x = -0.1; x <= 0.1; x += 0.005)
+        s.add_wall(Vec2(x, -0.005), 0.01);
+    for (int k = 0; k < 30; ++k)
+        add_disk(s, Vec2(-0.04 + 0.0081 * (k % 10), 0.01 + 0.0081 * (k / 10)), d_large,
+                 Vec2(0.1 * ((k * 7) % 5 - 2), 0.0));
+    for (int step = 0; step < 8000; ++step)
+        s.step();
+    return s.contacts_from_list().size();
+}
+
 // The exact damped linear oscillator of one contact (docs/model.md, normal force):
 // mbar x'' = -k_n x - gamma_n mbar x', x(0) = 0, x'(0) = v0 > 0. With omega0^2 = k_n/mbar,
 // beta = gamma_n/2, omega = sqrt(omega0^2 - beta^2): x(t) = v0/omega e^{-beta t} sin(omega t),

@@ -116,14 +116,7 @@ TEST(LoadBand, EveryPathAndArrangementGivesTheSameBits) {
             System s(c);
             s.set_step_fusion(fusion);
             s.set_load_band(0.0, 0.03, 5.0 * g);
-            for (double x = -0.1; x <= 0.1; x += 0.005)
-                s.add_wall(Vec2(x, -0.005), 0.01);
-            for (int k = 0; k < 30; ++k)
-                add_disk(s, Vec2(-0.04 + 0.0081 * (k % 10), 0.01 + 0.0081 * (k / 10)), d_large,
-                         Vec2(0.1 * ((k * 7) % 5 - 2), 0.0));
-            for (int step = 0; step < 8000; ++step)
-                s.step();
-            EXPECT_GT(s.contacts_from_list().size(), 20u) << "the pile must have landed";
+            EXPECT_GT(drop_pile(s), 20u) << "the pile must have landed";
             std::vector<double> out;
             for (int i = 0; i < s.mobile_count(); ++i) {
                 out.push_back(s.position(i).x());
