@@ -40,6 +40,10 @@ usage:
   clogging.py heads - STEADY.h5 --reference TAU,TAU_SE,S,S_SE,JAMS [...]
       the same against a published side given as numbers (docs/clogging.md quotes them) when its
       store is not at hand
+  clogging.py heads REF.h5 STEADY.h5 --reference-point LABEL_PART [...]
+      the same against the one point of REF.h5 whose label contains LABEL_PART; with the same
+      store twice, its other points against that one (the lid against the 1500-disk head at
+      D = 3.1 cm: campaigns/open-question/lid-scan-3.1.toml)
   clogging.py lid-stress STORE.h5 [--half-width 0.03] [--height 0.05] [--json OUT]
       per point of a store with fields: the mean coarse-grained pressure (units of m g) in the
       cells within the half-width (m) of the axis and between the outlet and the height (m)
@@ -295,15 +299,32 @@ def reference_row(text):
             "tau": given(tau, tau_se), "mean_s": given(s_mean, s_se)}
 
 
-def heads(published, steady, ns_args, out, reference=None):
+def pick_reference(rows, text):
+    """The one row whose label contains `text` (heads --reference-point: the reference is a
+    point of a store with several, such as the 1500-disk head beside the lid in one store);
+    SystemExit naming the labels when none or several match."""
+    hits = [r for r in rows if text in r["label"]]
+    if len(hits) != 1:
+        sys.exit("clogging.py heads: --reference-point %r matches %d points of %s (one is "
+                 "needed); its labels: %s" % (text, len(hits), rows[0]["store"] if rows else
+                                              "the store", "; ".join(r["label"] for r in rows)))
+    return hits[0]
+
+
+def heads(published, steady, ns_args, out, reference=None, reference_point=None):
     ns_by_label = {}
     for a in ns_args or []:
         label, _, ns = a.rpartition("=")
         ns_by_label[label] = float(ns)
     ref = [reference_row(reference)] if reference else point_rows(published, ns_by_label)
     rows = point_rows(steady, ns_by_label)
+    if reference_point is not None and not reference:
+        ref = [pick_reference(ref, reference_point)]
+        if os.path.realpath(published) == os.path.realpath(steady):  # the others against it
+            rows = [r for r in rows if r["label"] != ref[0]["label"]]
     if len(ref) != 1:
-        sys.exit("clogging.py heads: the published store must hold one point, it has %d" % len(ref))
+        sys.exit("clogging.py heads: the published store must hold one point, it has %d "
+                 "(--reference-point LABEL_PART chooses one)" % len(ref))
     ref = ref[0]
     for row in rows:
         row["z_tau"] = z_of(row["tau"], ref["tau"])
@@ -887,6 +908,10 @@ def main():
     h.add_argument("--reference", metavar="TAU,TAU_SE,S,S_SE,JAMS",
                    help="the published side as numbers instead of the store (give the store's "
                    "argument as -)")
+    h.add_argument("--reference-point", metavar="LABEL_PART",
+                   help="the point of the published store whose label contains this is the "
+                   "reference (the store may hold several; given twice, a store's other points "
+                   "against one of its own)")
     h.add_argument("--json")
     ls = sub.add_parser("lid-stress")
     ls.add_argument("store")
@@ -969,7 +994,10 @@ def main():
             sys.exit("clogging.py lid-stress: --half-width and --height must be positive")
         lid_stress(args.store, args.half_width, args.height, args.json)
     else:
-        heads(args.published, args.steady, args.ns_per_particle_step, args.json, args.reference)
+        if args.reference and args.reference_point:
+            sys.exit("clogging.py heads: --reference and --reference-point exclude each other")
+        heads(args.published, args.steady, args.ns_per_particle_step, args.json, args.reference,
+              args.reference_point)
 
 
 if __name__ == "__main__":

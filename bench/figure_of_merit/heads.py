@@ -3,14 +3,15 @@
 small-head steady state, at D = 3.1 and 3.5 cm, theta = 45 deg, the calibrated model with the
 growing shakes (bench/figure_of_merit/README.md, "Heads").
 
-usage: heads.py CAMPAIGN_EXE [--heads 300 700 1500] [--D 3.1 3.5] [--out DIR] [--short 5 --long 25]
+usage: heads.py CAMPAIGN_EXE [--heads 300 700 1500] [--lids 0 22] [--D 3.1 3.5] [--out DIR]
+                [--short 5 --long 25] [--no-published]
 
 Every run is one `campaign simulate` of a sweep written here, timed by its CPU time (user +
 system of the process, from os.wait4: robust to a shared machine, unlike wall time):
   - published: one full realization per outlet (fill, settle, discharge to empty with its jams
     and shakes): core-seconds per flowing second = CPU / flowing time (the discharge time, the
     time the hopper was jammed excluded), fill and settle included;
-  - steady state: per head and outlet, a short and a long realization (max_time_s = SHORT and
+  - steady state: per head, lid (`protocol.lid_gravity`, issue 40; 0: none) and outlet, a short and a long realization (max_time_s = SHORT and
     LONG s of discharge, no jam limit): the marginal cost of a flowing second is the CPU
     difference over the flowing-time difference (the fill and settle cancel: a long campaign
     amortises them), the intercept what one fill and settle costs.
@@ -87,6 +88,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("exe")
     ap.add_argument("--heads", type=int, nargs="*", default=[300, 700, 1500])
+    ap.add_argument("--lids", type=float, nargs="*", default=[0.0],
+                    help="protocol.lid_gravity of the steady states (0: no lid)")
     ap.add_argument("--D", type=float, nargs="*", default=[3.1, 3.5])
     ap.add_argument("--short", type=float, default=5.0)
     ap.add_argument("--long", type=float, default=25.0)
@@ -104,19 +107,24 @@ def main():
             rows.append(r)
             print(json.dumps(r), flush=True)
         for N in args.heads:
-            ss = 'mode = "steady_state"\n'
-            a = cpu_of(args.exe, BASE.format(N=N, T=args.short, extra=ss), D, 1, work,
-                       "steady_N%d_D%s_short" % (N, D))
-            b = cpu_of(args.exe, BASE.format(N=N, T=args.long, extra=ss), D, 1, work,
-                       "steady_N%d_D%s_long" % (N, D))
-            slope = (b["cpu_s"] - a["cpu_s"]) / (b["flowing_s"] - a["flowing_s"])
-            r = {"D_cm": D, "protocol": "steady_state", "particles": N, "short": a, "long": b,
-                 "core_s_per_flowing_s": slope,
-                 "fill_and_settle_core_s": a["cpu_s"] - slope * a["flowing_s"]}
-            rows.append(r)
-            print(json.dumps(r), flush=True)
-    print("\n%-6s %-13s %6s %22s %24s %10s" % ("D (cm)", "protocol", "N", "core-s / flowing s",
-                                                 "flowing s / core-hour", "vs published"))
+            for lid in args.lids:
+                if lid < 0:
+                    sys.exit("heads.py: --lids: %g is negative (0: no lid)" % lid)
+                ss = 'mode = "steady_state"\n' + ("lid_gravity = %r\n" % lid if lid else "")
+                tag = "steady_N%d%s_D%s" % (N, "_lid%g" % lid if lid else "", D)
+                a = cpu_of(args.exe, BASE.format(N=N, T=args.short, extra=ss), D, 1, work,
+                           tag + "_short")
+                b = cpu_of(args.exe, BASE.format(N=N, T=args.long, extra=ss), D, 1, work,
+                           tag + "_long")
+                slope = (b["cpu_s"] - a["cpu_s"]) / (b["flowing_s"] - a["flowing_s"])
+                r = {"D_cm": D, "protocol": "lid" if lid else "steady_state", "particles": N,
+                     "lid_gravity": lid, "short": a, "long": b, "core_s_per_flowing_s": slope,
+                     "fill_and_settle_core_s": a["cpu_s"] - slope * a["flowing_s"]}
+                rows.append(r)
+                print(json.dumps(r), flush=True)
+    print("\n%-6s %-13s %6s %5s %22s %24s %10s" % (
+        "D (cm)", "protocol", "N", "lid", "core-s / flowing s", "flowing s / core-hour",
+        "vs published"))
     for D in args.D:
         pub = [r for r in rows if r["D_cm"] == D and r["protocol"] == "published"]
         ref = 3600 / pub[0]["core_s_per_flowing_s"] if pub else None
@@ -124,8 +132,9 @@ def main():
             per_h = 3600 / r["core_s_per_flowing_s"]
             r["flowing_s_per_core_hour"] = per_h
             r["ratio_to_published"] = per_h / ref if ref else None
-            print("%-6s %-13s %6d %22.3f %24.0f %10s" % (
-                D, r["protocol"], r["particles"], r["core_s_per_flowing_s"], per_h,
+            print("%-6s %-13s %6d %5s %22.3f %24.0f %10s" % (
+                D, r["protocol"], r["particles"], "%g" % r.get("lid_gravity", 0) if
+                r.get("lid_gravity") else "-", r["core_s_per_flowing_s"], per_h,
                 "%.1fx" % r["ratio_to_published"] if ref else "-"))
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "heads.json"), "w") as fh:

@@ -280,6 +280,19 @@ for bad in ("5,0.5,1000,100", "5,0.5,x,100,100", "5,0,1000,100,100"):
     except SystemExit as e:
         check("--reference" in str(e), "reference %r: %s" % (bad, e))
 
+# heads --reference-point: one point of a store with several is the reference; none or two
+# matching is an error that lists the labels.
+pts = [{"store": "s.h5", "label": "D_cm=3.1 hopper.particles=1500"},
+       {"store": "s.h5", "label": "D_cm=3.1 hopper.particles=500 protocol.lid_gravity=22"}]
+check(clogging.pick_reference(pts, "particles=1500") is pts[0], "reference point by label")
+for bad in ("particles=700", "D_cm=3.1"):
+    try:
+        clogging.pick_reference(pts, bad)
+        check(False, "reference point %r accepted" % bad)
+    except SystemExit as e:
+        check("--reference-point" in str(e) and "lid_gravity=22" in str(e),
+              "reference point %r: %s" % (bad, e))
+
 # lid-stress: the mean pressure over the cells within the half-width of the axis and between the
 # outlet and the height; a cell no window reached (NaN) is left out. Cells of 1 cm: centres at
 # x = -2.5 ... 2.5 cm, y = -0.5 ... 6.5 cm; pressure = 10 + 100 y (m) + x (m) by hand.
