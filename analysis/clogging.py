@@ -267,6 +267,8 @@ def point_rows(path, ns_by_label):
                    "realizations": int(len(rr)), "tau": tau, "mean_s": s_mean,
                    "particle_steps": steps,
                    "particle_steps_per_jam": steps / tau["jams"] if tau["jams"] else None,
+                   "discharge_rate": (float(rr["discharge_rate"].mean())
+                                      if len(rr) and "discharge_rate" in rr else None),
                    "statuses": rr["status"].value_counts().to_dict()}
             ns = ns_by_label.get(pt["label"])
             if ns:
@@ -300,10 +302,10 @@ def reference_row(text):
 
 
 def pick_reference(rows, text):
-    """The one row whose label contains `text` (heads --reference-point: the reference is a
-    point of a store with several, such as the 1500-disk head beside the lid in one store);
-    SystemExit naming the labels when none or several match."""
-    hits = [r for r in rows if text in r["label"]]
+    """The row whose label is `text`, else the one row whose label contains it (heads
+    --reference-point: the reference is a point of a store with several, such as the 1500-disk
+    head beside the lid in one store); SystemExit naming the labels when none or several match."""
+    hits = [r for r in rows if r["label"] == text] or [r for r in rows if text in r["label"]]
     if len(hits) != 1:
         sys.exit("clogging.py heads: --reference-point %r matches %d points of %s (one is "
                  "needed); its labels: %s" % (text, len(hits), rows[0]["store"] if rows else
@@ -329,17 +331,18 @@ def heads(published, steady, ns_args, out, reference=None, reference_point=None)
     for row in rows:
         row["z_tau"] = z_of(row["tau"], ref["tau"])
         row["z_mean_s"] = z_of(row["mean_s"], ref["mean_s"])
-    print("%-44s %6s %5s %-30s %-30s %8s %8s %12s" % (
-        "point", "N", "jams", "tau (s) +- se [95% CI]", "<s> +- se [95% CI]", "z tau", "z <s>",
-        "Mps/jam"))
+    w = max([len("point")] + [len(r["label"]) for r in [ref] + rows])  # whole labels
+    print("%-*s %6s %5s %-30s %-30s %8s %8s %12s %10s" % (
+        w, "point", "N", "jams", "tau (s) +- se [95% CI]", "<s> +- se [95% CI]", "z tau", "z <s>",
+        "Mps/jam", "rate (1/s)"))
     for row in [ref] + rows:
-        print("%-44s %6d %5d %-30s %-30s %8s %8s %12s" % (
-            row["label"][:44], row["particles"], row["tau"]["jams"], fmt(row["tau"]),
+        print("%-*s %6d %5d %-30s %-30s %8s %8s %12s %10s" % (
+            w, row["label"], row["particles"], row["tau"]["jams"], fmt(row["tau"]),
             fmt(row["mean_s"]),
             "%+.2f" % row["z_tau"] if row.get("z_tau") is not None else "-",
             "%+.2f" % row["z_mean_s"] if row.get("z_mean_s") is not None else "-",
             "%.4g" % (row["particle_steps_per_jam"] / 1e6) if row["particle_steps_per_jam"]
-            else "-"))
+            else "-", "%.0f" % row["discharge_rate"] if row.get("discharge_rate") else "-"))
     if out:
         with open(out, "w") as fh:
             json.dump({"published": ref, "steady_state": rows}, fh, indent=1)

@@ -285,6 +285,10 @@ for bad in ("5,0.5,1000,100", "5,0.5,x,100,100", "5,0,1000,100,100"):
 pts = [{"store": "s.h5", "label": "D_cm=3.1 hopper.particles=1500"},
        {"store": "s.h5", "label": "D_cm=3.1 hopper.particles=500 protocol.lid_gravity=22"}]
 check(clogging.pick_reference(pts, "particles=1500") is pts[0], "reference point by label")
+# a whole label is that point even where it is part of another's
+pts.append({"store": "s.h5", "label": "D_cm=3.1"})
+check(clogging.pick_reference(pts, "D_cm=3.1") is pts[2], "reference point by its whole label")
+pts.pop()
 for bad in ("particles=700", "D_cm=3.1"):
     try:
         clogging.pick_reference(pts, bad)
