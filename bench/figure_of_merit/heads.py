@@ -11,8 +11,8 @@ system of the process, from os.wait4: robust to a shared machine, unlike wall ti
   - published: one full realization per outlet (fill, settle, discharge to empty with its jams
     and shakes): core-seconds per flowing second = CPU / flowing time (the discharge time, the
     time the hopper was jammed excluded), fill and settle included;
-  - steady state: per head, lid (`protocol.lid_gravity`, issue 40; 0: none) and outlet, a short and a long realization (max_time_s = SHORT and
-    LONG s of discharge, no jam limit): the marginal cost of a flowing second is the CPU
+  - steady state: per head, lid (`protocol.lid_gravity`, issue 40; 0: none) and outlet, a short
+    and a long realization (max_time_s = SHORT and LONG s of discharge, no jam limit): the marginal cost of a flowing second is the CPU
     difference over the flowing-time difference (the fill and settle cancel: a long campaign
     amortises them), the intercept what one fill and settle costs.
 Jams per core-hour = (jams per flowing second) x (flowing seconds per core-hour); where the jam
@@ -96,6 +96,8 @@ def main():
     ap.add_argument("--no-published", action="store_true")
     ap.add_argument("--out", default=".")
     args = ap.parse_args()
+    if any(lid < 0 for lid in args.lids):
+        sys.exit("heads.py: --lids must be >= 0 (0: no lid), got %s" % args.lids)
     work = tempfile.mkdtemp(prefix="heads_")
     rows = []
     for D in args.D:
@@ -108,8 +110,6 @@ def main():
             print(json.dumps(r), flush=True)
         for N in args.heads:
             for lid in args.lids:
-                if lid < 0:
-                    sys.exit("heads.py: --lids: %g is negative (0: no lid)" % lid)
                 ss = 'mode = "steady_state"\n' + ("lid_gravity = %r\n" % lid if lid else "")
                 tag = "steady_N%d%s_D%s" % (N, "_lid%g" % lid if lid else "", D)
                 a = cpu_of(args.exe, BASE.format(N=N, T=args.short, extra=ss), D, 1, work,
@@ -133,8 +133,8 @@ def main():
             r["flowing_s_per_core_hour"] = per_h
             r["ratio_to_published"] = per_h / ref if ref else None
             print("%-6s %-13s %6d %5s %22.3f %24.0f %10s" % (
-                D, r["protocol"], r["particles"], "%g" % r.get("lid_gravity", 0) if
-                r.get("lid_gravity") else "-", r["core_s_per_flowing_s"], per_h,
+                D, r["protocol"], r["particles"], "%g" % r["lid_gravity"] if r.get("lid_gravity")
+                else "-", r["core_s_per_flowing_s"], per_h,
                 "%.1fx" % r["ratio_to_published"] if ref else "-"))
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "heads.json"), "w") as fh:
