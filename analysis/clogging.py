@@ -798,12 +798,50 @@ def flow_time_to_decide(rate_e, rate_p, power=0.95, margin=1.0, step=1.01, t_max
     return None
 
 
+def bound_probabilities(points, fit, outlets_cm, flows, bound_cm, tail=1e-4):
+    """Where more flow would raise the profile likelihood's 95 % lower bound on D_c above
+    bound_cm (the open question's second target): for each outlet D and flowing time T added
+    there, P(the refitted bound > bound_cm) when the fitted exponential is true. The jams in T
+    are Poisson with the exponential's mean, so the probability is exact, a sum over their
+    count n (to a Poisson tail below `tail`) of P(n) times whether poisson_fits over `points`
+    with n jams and T seconds added at D moves the bound past bound_cm. Beyond the bound one jam
+    does it (a critical law cannot jam at or beyond D_c), so there P = 1 - exp(-lambda T) unless
+    the points already exclude it. Returns one row per outlet and time."""
+    rows = []
+    cache = {}
+    for D in outlets_cm:
+        rate = math.exp(fit["exp_ln_A"] - fit["exp_B"] * D / 100)
+        for T in flows:
+            mean = rate * T
+            top = int(stats.poisson.isf(tail, mean)) + 1
+            prob = 0.0
+            for n in range(top + 1):
+                key = (D, T, n)
+                if key not in cache:
+                    pts = [dict(p, tau=dict(p["tau"])) for p in points]
+                    here = [p for p in pts if abs(p["D_cm"] - D) < 1e-6]
+                    if not here:
+                        here = [{"D_cm": D, "flow_time": 0.0, "tau": {"jams": 0}}]
+                        pts.append(here[0])
+                    here[0]["flow_time"] += T
+                    here[0]["tau"]["jams"] += n
+                    f = poisson_fits(pts)
+                    cache[key] = "pow_Dc_lower_95" in f and f["pow_Dc_lower_95"] * 100 > bound_cm
+                if cache[key]:
+                    prob += stats.poisson.pmf(n, mean)
+            rows.append({"D_cm": D, "flow_time": T, "jams_exponential": mean,
+                         "p_bound_raised": prob})
+    return rows
+
+
 def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95, fit="poisson",
-                 dc_cm=None):
+                 dc_cm=None, bound_cm=None, flows=(8000.0, 16000.0)):
     """Per fitted group of the store's jam-rate fits, per outlet: both laws' tau, the flowing
     time that decides between them (flow_time_to_decide), the jams each law expects in it and
     the core-hours at the store's cost per flowing second (worker time over flowing time, all
-    points) unless given."""
+    points) unless given. With bound_cm (Poisson fit only), per outlet and flowing time in
+    `flows` also the probability that this much more flow raises the D_c lower bound above it
+    (bound_probabilities)."""
     q = question_summary(s, path)
     if core_s_per_flow_s is None:
         flow = sum(r["flow_time"] for r in q["points"])
@@ -850,8 +888,17 @@ def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95, f
                    key=lambda r: r["core_hours_to_go"], default=None)
         groups.append({"group": f.get("group"), "fit": f, "outlets": rows,
                        "cheapest": best["D_cm"] if best else None})
-    return {"store": path, "power": power, "core_s_per_flow_s": core_s_per_flow_s,
-            "groups": groups}
+    result = {"store": path, "power": power, "core_s_per_flow_s": core_s_per_flow_s,
+              "groups": groups}
+    if bound_cm is not None:
+        base = poisson_fits(q["points"])
+        rows = bound_probabilities(q["points"], base, outlets_cm, flows, bound_cm)
+        for r in rows:
+            r["core_hours"] = r["flow_time"] * core_s_per_flow_s / 3600
+        best = max(rows, key=lambda r: (r["p_bound_raised"] / r["core_hours"]), default=None)
+        result["bound"] = {"bound_cm": bound_cm, "lower_95_cm": base["pow_Dc_lower_95"] * 100,
+                           "rows": rows, "best": best}
+    return result
 
 
 def plan_markdown(result):
@@ -886,13 +933,30 @@ def plan_markdown(result):
                    "are left out): a plan, not a guarantee. To go: the flowing time still "
                    "missing after what the store holds at that outlet.")
         out.append("")
+    b = result.get("bound")
+    if b:
+        out.append("The D_c lower bound (95 %%, profile likelihood) stands at %.3g cm. The "
+                   "probability that more flow at one outlet raises it above %.3g cm, if the "
+                   "Poisson exponential is true (exact over the jam count, every count refitted "
+                   "with the store's points):" % (b["lower_95_cm"], b["bound_cm"]))
+        out.append("")
+        out.append("| D (cm) | flowing time added (s) | jams if exponential | P(bound > %.3g cm) "
+                   "| core-hours | P per core-hour |" % b["bound_cm"])
+        out.append("|---|---|---|---|---|---|")
+        for r in b["rows"]:
+            out.append("| %.3g | %s | %s | %.2f | %s | %.3f |%s" % (
+                r["D_cm"], sig(r["flow_time"]), sig(r["jams_exponential"]),
+                r["p_bound_raised"], sig(r["core_hours"]),
+                r["p_bound_raised"] / r["core_hours"],
+                "  <- best per core-hour" if r is b["best"] else ""))
+        out.append("")
     return "\n".join(out)
 
 
-def plan(path, outlets, core_s, power, fit, dc, out, md):
+def plan(path, outlets, core_s, power, fit, dc, out, md, bound=None, flows=(8000.0, 16000.0)):
     with open_store(path) as s:
         try:
-            result = plan_summary(s, path, outlets, core_s, power, fit, dc)
+            result = plan_summary(s, path, outlets, core_s, power, fit, dc, bound, flows)
         except ValueError as e:
             sys.exit("clogging.py plan: %s: %s" % (path, e))
     emit(result, plan_markdown(result), out, md)
@@ -949,6 +1013,12 @@ def main():
                     "own (`campaign analyze`, outlets without a jam left out)")
     pl.add_argument("--dc", type=float, help="test the exponential against the power law with "
                     "this critical outlet (cm) instead of the best-fitting one")
+    pl.add_argument("--bound", type=float, metavar="CM",
+                    help="also: the probability that more flow at each outlet raises the D_c "
+                    "lower bound above CM (Poisson fit; slow: a refit per jam count)")
+    pl.add_argument("--flows", default="8000,16000", metavar="S,S",
+                    help="with --bound: the flowing times to add per outlet, s (default "
+                    "%(default)s)")
     pl.add_argument("--json")
     pl.add_argument("--md", help="write the table as Markdown too")
     args = ap.parse_args()
@@ -980,8 +1050,19 @@ def main():
                      % args.core_s_per_flow_s)
         if args.dc is not None and (args.fit != "poisson" or not args.dc > 0):
             sys.exit("clogging.py plan: --dc takes a positive D_c in cm, with --fit poisson")
+        try:
+            flows = [float(v) for v in args.flows.split(",")]
+        except ValueError:
+            flows = None
+        if not flows or any(not (t > 0 and math.isfinite(t)) for t in flows):
+            sys.exit("clogging.py plan: --flows must be positive times (s) separated by commas, "
+                     "got %r" % args.flows)
+        if args.bound is not None and (args.fit != "poisson" or args.dc is not None or
+                                       not (args.bound > 0 and math.isfinite(args.bound))):
+            sys.exit("clogging.py plan: --bound takes a positive D_c in cm, with --fit poisson "
+                     "and without --dc")
         plan(args.store, outlets, args.core_s_per_flow_s, args.power, args.fit, args.dc,
-             args.json, args.md)
+             args.json, args.md, args.bound, flows)
     elif args.cmd == "levels":
         try:
             bins = [float(v) for v in args.bins.split(",")]

@@ -227,6 +227,30 @@ with warnings.catch_warnings():
 check(pf0["exp_B"] == pf["exp_B"] and pf0["pow_lnL"] == pf["pow_lnL"] and pf0["n_points"] == 3,
       "an outlet without flowing time changes nothing: %s" % pf0)
 
+# plan --bound: beyond the bound one jam excludes every critical outlet at or below it (a
+# power law cannot jam at or beyond its D_c), and no jam there cannot raise the bound (it
+# favours the smaller D_c), so at 3.7 cm with the bound at 3.6 cm the probability is
+# P(n >= 1) = 1 - exp(-lambda T), lambda the exponential's rate there (to the 1e-4 tail).
+lam37 = math.exp(pf["exp_ln_A"] - pf["exp_B"] * 0.037)
+check(pf["pow_Dc_lower_95"] * 100 < 3.6, "the points alone leave D_c < 3.6 cm open: %s" % pf)
+br = clogging.bound_probabilities(with_zero, pf, [3.7, 3.3], [500.0, 2000.0], 3.6)
+check([(r["D_cm"], r["flow_time"]) for r in br] == [(3.7, 500.0), (3.7, 2000.0), (3.3, 500.0),
+                                                    (3.3, 2000.0)], "bound rows: %s" % br)
+for r in br[:2]:
+    want = 1 - math.exp(-lam37 * r["flow_time"])
+    check(abs(r["jams_exponential"] - lam37 * r["flow_time"]) < 1e-12
+          and abs(r["p_bound_raised"] - want) < 2e-4, "beyond the bound: %s, want %.5f" % (r, want))
+check(all(0.0 <= r["p_bound_raised"] <= 1.0 for r in br) and
+      br[3]["p_bound_raised"] >= br[2]["p_bound_raised"] - 1e-12,
+      "below the bound a probability, not falling with more flow: %s" % br[2:])
+
+for r in br:
+    r["core_hours"] = r["flow_time"] / 3600
+bmd = clogging.plan_markdown({"groups": [], "bound": {"bound_cm": 3.6, "lower_95_cm": 3.2,
+                                                     "rows": br, "best": br[1]}})
+check("| 3.7 | 2000 |" in bmd and "<- best per core-hour" in bmd and "stands at 3.2 cm" in bmd,
+      "bound markdown:\n%s" % bmd)
+
 # published (issue 39, part 5): against the published study's jam rate at theta = 45 deg. Point 0
 # (D = 2.7 cm): 10 jams in 100 s; the published rate is 261 / (40 x 34.45 s) = 0.189405 /s, so
 # 18.9405 expected, ratio 0.52797, p = 2 P(X <= 10) under Poisson(18.9405) (summed here by
