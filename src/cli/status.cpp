@@ -167,7 +167,9 @@ std::string status_json(const store::StoreStatus& s) {
                               {"done", p.done},
                               {"failed", p.failed},
                               {"errors", p.errors},
-                              {"pending", p.pending}});
+                              {"pending", p.pending},
+                              {"beyond_sweep", p.beyond_sweep},
+                              {"stored_beyond_plan", p.extra}});
     j["points"] = std::move(points);
     Json failures = Json::array();
     for (const auto& f : s.failures)
@@ -294,6 +296,18 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
         if (limits)
             out << "(total: the realizations the rounds allotted so far; up to: "
                    "max_realizations)\n";
+        int beyond = 0, lowered = 0, kept = 0;
+        for (const auto& p : s.points)
+            if (p.beyond_sweep > 0) {
+                beyond += p.beyond_sweep;
+                kept += p.extra;
+                ++lowered;
+            }
+        if (beyond > 0)
+            out << "(the last run's sweep lowered the realizations of " << lowered
+                << " point(s): " << beyond << " realization(s) an earlier run planned are left "
+                << "out of total and pending, " << kept
+                << " of them stored and kept; raising the count again runs the rest)\n";
     }
     if (!s.failures.empty()) {
         out << "\nfailures\n";
@@ -303,6 +317,24 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
                                 : std::string("status failed"))
                 << "): " << f.reason << '\n';
     }
+}
+
+// The store's plan only grows (each planned task is a row of /tasks), but a sweep may lower a
+// point's realizations, and `campaign run` then runs the sweep's count: the counts of the last
+// run's sweep (recorded with the run) where they are below the plan, for read_status to cap
+// the points with. None for a campaign with a target (apply_target's).
+std::map<std::string, int> lowered_counts(const store::StoreStatus& s) {
+    std::map<std::string, int> lowered;
+    const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
+    if (!recorded || recorded->target) return lowered;
+    std::map<std::string, int> planned;
+    for (const auto& p : s.points)
+        planned.emplace(p.label, p.planned);
+    for (const auto& p : recorded->points)
+        if (const auto it = planned.find(p.label);
+            it != planned.end() && p.realizations < it->second)
+            lowered.emplace(p.label, p.realizations);
+    return lowered;
 }
 
 // A campaign with a target (adaptive.hpp) runs up to max_realizations per point, as its rounds
@@ -339,7 +371,11 @@ int status_command(const std::vector<std::string>& args) {
         print_status_help(std::cout);
         return 0;
     }
-    store::StoreStatus s = store::read_status(single_positional(vm, "store", "store", "STORE.h5"));
+    const std::filesystem::path path = single_positional(vm, "store", "store", "STORE.h5");
+    store::StoreStatus s = store::read_status(path);
+    // Read again with the caps (a second scan of the journal) only where a sweep lowered a count.
+    if (const auto lowered = lowered_counts(s); !lowered.empty())
+        s = store::read_status(path, lowered);
     const std::string rounds = apply_target(s);
     if (vm["json"].as<bool>()) {
         std::cout << status_json(s) << '\n';

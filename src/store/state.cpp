@@ -198,7 +198,7 @@ const State::Messages& State::message_of(int point, int realization) const {
     return it == messages.end() ? none : it->second;
 }
 
-StoreStatus State::status() const {
+StoreStatus State::status(const std::map<std::string, int>& counts) const {
     StoreStatus s;
     s.has_plan = !plan.points.empty();
     s.campaign_name = plan.name;
@@ -212,6 +212,12 @@ StoreStatus State::status() const {
         ps.label = plan.points[p].label;
         ps.planned = plan.points[p].realizations();
         ps.limit = plan.points[p].max_realizations();
+        if (const auto cap = counts.find(ps.label);
+            cap != counts.end() && cap->second < ps.planned) {
+            ps.beyond_sweep = ps.planned - std::max(cap->second, 0);
+            ps.planned = std::max(cap->second, 0);
+            ps.limit = std::min(ps.limit, ps.planned);
+        }
         const auto& t = tasks[p];
         for (std::size_t r = 0; r < t.size(); ++r) {
             const TaskEntry& e = t[r];

@@ -70,7 +70,8 @@ struct State {
     std::uint64_t seed_of(int point, int realization) const;
     // The task's words (empty when it has none).
     const Messages& message_of(int point, int realization) const;
-    StoreStatus status() const;
+    // `counts`: read_status's caps (store.hpp).
+    StoreStatus status(const std::map<std::string, int>& counts = {}) const;
 };
 
 // fsync of a file or directory, best effort (some file systems refuse it for directories).

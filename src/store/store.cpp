@@ -491,7 +491,7 @@ void Store::end_run(const RunEndRecord& r) {
     m.h5_in_step = true;
 }
 
-StoreStatus read_status(const fs::path& store) {
+StoreStatus read_status(const fs::path& store, const std::map<std::string, int>& counts) {
     const fs::path jpath = journal_path(store);
     std::error_code ec;
     refuse_directory(store, "the store");
@@ -510,7 +510,7 @@ StoreStatus read_status(const fs::path& store) {
         scan_journal(jpath, [&](RecordType t, std::uint64_t off, std::span<const std::uint8_t> p) {
             apply_record(state, t, off, p, nullptr);
         });
-    StoreStatus s = state.status();
+    StoreStatus s = state.status(counts);
     s.store = store;
     s.writer_active = journal_locked(jpath);
     s.hdf5_in_step = !s.writer_active && state.closed_in_step() && fs::exists(store, ec);

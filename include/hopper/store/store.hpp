@@ -78,6 +78,9 @@ struct PointStatus {
     int pending = 0;
     int extra = 0;  // stored realizations beyond the plan (cannot happen from a journal the
                     // master wrote; counted rather than dropped)
+    // Planned by an earlier run but beyond the count of the last run's sweep, which lowered it:
+    // neither planned nor pending here (read_status's counts; the plan itself only grows).
+    int beyond_sweep = 0;
     // Over the planned realizations with a result whose status is not failed:
     int jams = 0;
     int intervals = 0;          // survival intervals
@@ -127,8 +130,12 @@ struct StoreStatus {
     CampaignPlan plan;             // the union of every run's plan (labels, scene texts, seeds)
 };
 
-// Progress and failures from the journal. Never blocks or disturbs a writer.
-StoreStatus read_status(const std::filesystem::path& store);
+// Progress and failures from the journal. Never blocks or disturbs a writer. `counts` (label ->
+// realizations) caps the points a sweep lowered below the plan, which only grows: the tasks
+// beyond the cap count as beyond_sweep, their stored results as extra (campaign status, from
+// the last run's sweep).
+StoreStatus read_status(const std::filesystem::path& store,
+                        const std::map<std::string, int>& counts = {});
 
 // Every stored realization, read back.
 struct StoredRealization {
