@@ -323,9 +323,9 @@ void write_status(std::ostream& out, const store::StoreStatus& s) {
 // point's realizations, and `campaign run` then runs the sweep's count: the counts of the last
 // run's sweep (recorded with the run) where they are below the plan, for read_status to cap
 // the points with. None for a campaign with a target (apply_target's).
-std::map<std::string, int> lowered_counts(const store::StoreStatus& s) {
+std::map<std::string, int> lowered_counts(const store::StoreStatus& s,
+                                          const std::optional<config::CampaignSpec>& recorded) {
     std::map<std::string, int> lowered;
-    const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
     if (!recorded || recorded->target) return lowered;
     std::map<std::string, int> planned;
     for (const auto& p : s.points)
@@ -342,8 +342,8 @@ std::map<std::string, int> lowered_counts(const store::StoreStatus& s) {
 // replayed from the stored results as `campaign run` does. Without this, the batch script would
 // resubmit a finished target campaign up to its cap. Returns the description of the rounds
 // (empty without a target).
-std::string apply_target(store::StoreStatus& s) {
-    const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
+std::string apply_target(store::StoreStatus& s,
+                         const std::optional<config::CampaignSpec>& recorded) {
     if (!recorded || !recorded->target) return {};
     const config::CampaignSpec& spec = *recorded;
     const std::map<std::string, campaign::PointResults> stored =
@@ -373,10 +373,12 @@ int status_command(const std::vector<std::string>& args) {
     }
     const std::filesystem::path path = single_positional(vm, "store", "store", "STORE.h5");
     store::StoreStatus s = store::read_status(path);
+    // The last run's sweep, parsed once: its lowered counts, or its target's rounds.
+    const std::optional<config::CampaignSpec> recorded = campaign::recorded_campaign(s.runs);
     // Read again with the caps (a second scan of the journal) only where a sweep lowered a count.
-    if (const auto lowered = lowered_counts(s); !lowered.empty())
+    if (const auto lowered = lowered_counts(s, recorded); !lowered.empty())
         s = store::read_status(path, lowered);
-    const std::string rounds = apply_target(s);
+    const std::string rounds = apply_target(s, recorded);
     if (vm["json"].as<bool>()) {
         std::cout << status_json(s) << '\n';
     } else {

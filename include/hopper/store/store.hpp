@@ -76,8 +76,9 @@ struct PointStatus {
     int failed = 0;  // failed results plus tasks in error
     int errors = 0;  // of which in error (retried by the next run)
     int pending = 0;
-    int extra = 0;  // stored realizations beyond the plan (cannot happen from a journal the
-                    // master wrote; counted rather than dropped)
+    int extra = 0;  // stored realizations beyond the plan: those beyond read_status's counts
+                    // (a lowered sweep); otherwise none from a journal the master wrote,
+                    // counted rather than dropped
     // Planned by an earlier run but beyond the count of the last run's sweep, which lowered it:
     // neither planned nor pending here (read_status's counts; the plan itself only grows).
     int beyond_sweep = 0;
