@@ -807,28 +807,24 @@ def bound_probabilities(points, fit, outlets_cm, flows, bound_cm, tail=1e-4):
     with n jams and T seconds added at D moves the bound past bound_cm. Beyond the bound one jam
     does it (a critical law cannot jam at or beyond D_c), so there P = 1 - exp(-lambda T) unless
     the points already exclude it. Returns one row per outlet and time."""
+    def raised(D, T, n):  # the bound refitted with n jams in T more seconds at D
+        pts = [dict(p, tau=dict(p["tau"])) for p in points]
+        here = [p for p in pts if abs(p["D_cm"] - D) < 1e-6]
+        if not here:
+            here = [{"D_cm": D, "flow_time": 0.0, "tau": {"jams": 0}}]
+            pts.append(here[0])
+        here[0]["flow_time"] += T
+        here[0]["tau"]["jams"] += n
+        f = poisson_fits(pts)
+        return "pow_Dc_lower_95" in f and f["pow_Dc_lower_95"] * 100 > bound_cm
+
     rows = []
-    cache = {}
     for D in outlets_cm:
-        rate = math.exp(fit["exp_ln_A"] - fit["exp_B"] * D / 100)
+        rate = law_rates(fit, D / 100)[0]
         for T in flows:
             mean = rate * T
             top = int(stats.poisson.isf(tail, mean)) + 1
-            prob = 0.0
-            for n in range(top + 1):
-                key = (D, T, n)
-                if key not in cache:
-                    pts = [dict(p, tau=dict(p["tau"])) for p in points]
-                    here = [p for p in pts if abs(p["D_cm"] - D) < 1e-6]
-                    if not here:
-                        here = [{"D_cm": D, "flow_time": 0.0, "tau": {"jams": 0}}]
-                        pts.append(here[0])
-                    here[0]["flow_time"] += T
-                    here[0]["tau"]["jams"] += n
-                    f = poisson_fits(pts)
-                    cache[key] = "pow_Dc_lower_95" in f and f["pow_Dc_lower_95"] * 100 > bound_cm
-                if cache[key]:
-                    prob += stats.poisson.pmf(n, mean)
+            prob = sum(stats.poisson.pmf(n, mean) for n in range(top + 1) if raised(D, T, n))
             rows.append({"D_cm": D, "flow_time": T, "jams_exponential": mean,
                          "p_bound_raised": prob})
     return rows
@@ -890,8 +886,8 @@ def plan_summary(s, path, outlets_cm=None, core_s_per_flow_s=None, power=0.95, f
                        "cheapest": best["D_cm"] if best else None})
     result = {"store": path, "power": power, "core_s_per_flow_s": core_s_per_flow_s,
               "groups": groups}
-    if bound_cm is not None:
-        base = poisson_fits(q["points"])
+    if bound_cm is not None:  # the best-fitting laws (the fixed-D_c fit, if any, replaced them)
+        base = q["poisson_fit"] if dc_cm is None else poisson_fits(q["points"])
         rows = bound_probabilities(q["points"], base, outlets_cm, flows, bound_cm)
         for r in rows:
             r["core_hours"] = r["flow_time"] * core_s_per_flow_s / 3600
