@@ -167,7 +167,8 @@ freeze_when() {
 }
 # freeze_at_stop STORE COND WHAT: for a job whose run stops itself in a known state (started with
 # `env HOPPER_STORE_STOP=result:<n>`: the store raises SIGSTOP once the run's n-th result is
-# durable), waits until it has, freezes the rest of the job as freeze_job does, and fails naming
+# durable, after the batch that brought it: with several workers a batch can hold more than one
+# result, so COND asks for done >= n, never == n, unless one worker runs), waits until it has, freezes the rest of the job as freeze_job does, and fails naming
 # WHAT unless the status then satisfies COND. Where the state to act on is "so many stored, the
 # rest not yet handed out", this is the way: that state is the run's own, not one that a look
 # happened to catch, so no load can make the run end before it (freeze_when's slices bound the

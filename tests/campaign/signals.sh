@@ -23,7 +23,7 @@ NOT_HANDED_OUT="s['pending'] - len(s['running']) >= 2"
 
 # 1. SIGTERM: stop now, once the run is under way.
 start_job env HOPPER_STORE_STOP=result:1 "${CMD[@]}"
-freeze_at_stop "$STORE" "s['done'] == 1 and $NOT_HANDED_OUT" "a realization stored, 2 not handed out"
+freeze_at_stop "$STORE" "s['done'] >= 1 and $NOT_HANDED_OUT" "a realization stored, 2 not handed out"
 kill -TERM $FROZEN  # every rank, as Slurm does at the time limit
 thaw_job
 wait "$JOB"
@@ -51,7 +51,7 @@ PY
 : >job.err
 before=$("$EXE" status "$STORE" --json | "$PY" -c 'import json,sys; print(json.load(sys.stdin)["done"])')
 start_job env HOPPER_STORE_STOP=result:1 "${CMD[@]}"
-freeze_at_stop "$STORE" "s['done'] == $((before + 1)) and $NOT_HANDED_OUT" \
+freeze_at_stop "$STORE" "s['done'] >= $((before + 1)) and $NOT_HANDED_OUT" \
     "one more realization stored, 2 not handed out"
 if [ "$NP" -eq 0 ]; then kill -USR1 "$JOB"; else kill -USR1 $(pgrep -s "$JOB" -x mpirun); fi
 # mpirun forwards the signal to the (frozen) ranks: they continue once every one has it pending.
