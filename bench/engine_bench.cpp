@@ -7,7 +7,8 @@
 //
 //   --corrections  integrator.contact_corrections on (docs/accuracy.md)
 //   --skin S  integrator.skin (Verlet skin in units of d_small; default 0.4)
-//   --kernel  force path: auto (default), reference, baseline, avx2, avx512 (same bits)
+//   --kernel  force path: auto (default), reference, baseline, avx2, avx512, avx512-gather (same
+//   bits)
 //   --paths   every force path this CPU has, compared on one trajectory (CPU time per step)
 //   --fusion  none (default), corrector or step: the integrator's passes around the force pass
 //             (system.hpp, StepFusion; same bits)
@@ -198,7 +199,7 @@ double thread_cpu_seconds() {
 int compare_paths(Realization& run, int repeats, int steps, bool discharge) {
     System& sys = run.system();
     std::vector<KernelPath> paths{KernelPath::reference, KernelPath::baseline};
-    for (KernelPath p : {KernelPath::avx2, KernelPath::avx512}) {
+    for (KernelPath p : {KernelPath::avx2, KernelPath::avx512, KernelPath::avx512_gather}) {
         try {
             sys.set_kernel(p);
             paths.push_back(p);
@@ -376,7 +377,8 @@ int main(int argc, char** argv) {
                 stderr,
                 "usage: bench_engine [--repeats R] [--steps K] [--particles N] [--full] "
                 "[--skips] [--fields] [--csv FILE] [--scheme gear4|verlet] [--delta D] [--skin S] "
-                "[--corrections] [--kernel auto|reference|baseline|avx2|avx512] [--paths] "
+                "[--corrections] [--kernel auto|reference|baseline|avx2|avx512|avx512-gather] "
+                "[--paths] "
                 "[--fusion none|corrector|step] "
                 "[--lammps RUN_SH [--core C]]\n");
             return 2;

@@ -33,7 +33,7 @@ namespace {
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
                  "bench_phases: %s\nusage: bench_phases SWEEP.toml --D CM --theta DEG --seed N "
-                 "[--kernel auto|reference|baseline|avx2|avx512] [--interval S]\n",
+                 "[--kernel auto|reference|baseline|avx2|avx512|avx512-gather] [--interval S]\n",
                  why.c_str());
     std::exit(2);
 }

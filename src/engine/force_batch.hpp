@@ -74,6 +74,7 @@ const ForceTable& force_table_reference();
 const ForceTable& force_table_baseline();
 const ForceTable& force_table_avx2();
 const ForceTable& force_table_avx512();
+const ForceTable& force_table_avx512_gather();
 
 // The path to use for `wanted` on this CPU; throws core::ConfigError if it is not available.
 KernelPath resolve_kernel(KernelPath wanted);

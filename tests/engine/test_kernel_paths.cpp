@@ -108,7 +108,7 @@ void expect_identical(const State& a, const State& b, const std::string& what) {
 
 std::vector<KernelPath> batched_paths() {
     std::vector<KernelPath> out{KernelPath::baseline};
-    for (KernelPath p : {KernelPath::avx2, KernelPath::avx512}) {
+    for (KernelPath p : {KernelPath::avx2, KernelPath::avx512, KernelPath::avx512_gather}) {
         try {
             SystemConfig sc;
             sc.kernel = p;
@@ -187,13 +187,16 @@ TEST(KernelPaths, AutomaticResolvesToAConcretePathAndNamesAreParsed) {
     System s{SystemConfig()};
     EXPECT_NE(s.kernel_path(), KernelPath::automatic);
     EXPECT_EQ(parse_kernel_path("avx512"), KernelPath::avx512);
+    EXPECT_EQ(parse_kernel_path("avx512-gather"), KernelPath::avx512_gather);
+    EXPECT_EQ(to_string(KernelPath::avx512_gather), "avx512-gather");
     EXPECT_EQ(parse_kernel_path("auto"), KernelPath::automatic);
     try {
         parse_kernel_path("sse9");
         FAIL() << "an unknown path was accepted";
     } catch (const hopper::core::ConfigError& e) {
-        EXPECT_NE(std::string(e.what()).find("auto, reference, baseline, avx2 or avx512"),
-                  std::string::npos);
+        EXPECT_NE(
+            std::string(e.what()).find("auto, reference, baseline, avx2, avx512 or avx512-gather"),
+            std::string::npos);
     }
 }
 

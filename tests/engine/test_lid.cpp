@@ -127,7 +127,7 @@ TEST(LoadBand, EveryPathAndArrangementGivesTheSameBits) {
         };
         const auto ref = run(KernelPath::reference, StepFusion::none);
         for (auto path : {KernelPath::automatic, KernelPath::reference, KernelPath::baseline,
-                          KernelPath::avx2, KernelPath::avx512})
+                          KernelPath::avx2, KernelPath::avx512, KernelPath::avx512_gather})
             for (auto fusion : {StepFusion::none, StepFusion::corrector, StepFusion::step}) {
                 std::vector<double> got;
                 try {

@@ -59,9 +59,10 @@ struct DiagnosticNumbers {
 };
 
 struct Diagnostics : DiagnosticNumbers {
-    // The force pass that ran (to_string(KernelPath): reference, baseline, avx2, avx512). Every
-    // path gives the same bits; this says which one a node used (issue 12). Set when the
-    // realization ends (not kept in checkpoints: a resumed piece reports its own node's).
+    // The force pass that ran (to_string(KernelPath): reference, baseline, avx2, avx512,
+    // avx512-gather). Every path gives the same bits; this says which one a node used (issue
+    // 12). Set when the realization ends (not kept in checkpoints: a resumed piece reports its
+    // own node's).
     std::string force_path;
 };
 
@@ -145,9 +146,11 @@ constexpr void for_each_diagnostic(V&& v) {
         field("seconds_observers", &D::seconds_observers, "s", "wall-clock time in observers")));
     // Issue 12: which machine-dependent code ran, like the timings above (the bits do not depend
     // on it), so it is left out of the physics digest.
-    v(timed(since(field("force_path", &D::force_path, "",
-                        "force pass that ran: reference, baseline, avx2 or avx512 (same bits)"),
-                  4)));
+    v(timed(since(
+        field(
+            "force_path", &D::force_path, "",
+            "force pass that ran: reference, baseline, avx2, avx512 or avx512-gather (same bits)"),
+        4)));
 }
 
 // Calls v(def) for every member of an Event, in declaration order (the store's columns are

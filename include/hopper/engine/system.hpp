@@ -31,7 +31,10 @@ struct ForceArgs;
 // where it is found); the batched paths, the same pass with several lanes, pack the touching
 // pairs and evaluate the contact law in SIMD registers of the named instruction set; `automatic`
 // takes the path measured fastest (force_batch.cpp: the reference on the machines measured).
-enum class KernelPath { automatic, reference, baseline, avx2, avx512 };
+// avx512_gather ("avx512-gather"): the AVX-512 pass built to load partners with the hardware's
+// gather instructions, which pay on Intel's AVX-512 cores and not on AMD's (issue 41;
+// docs/performance.md): automatic picks it on an Intel CPU with AVX-512. The same bits.
+enum class KernelPath { automatic, reference, baseline, avx2, avx512, avx512_gather };
 std::string to_string(KernelPath p);
 KernelPath parse_kernel_path(const std::string& s);  // "auto", "reference", ...; ConfigError
 
