@@ -7,6 +7,7 @@
 //                       [--seeds N] [--first S] [--D CM] [--theta DEG] [--width CM]
 //                       [--particles N] [--max-time S] [--out FILE]
 //                       [--scheme gear4|verlet] [--delta N] [--corrections 0|1] [--settle-only 1]
+//                       [--settle-ke X] [--settle-hold S]
 //
 // Scenes (the published bidisperse disks and material, tau_c = 8e-4 s):
 //   discharge  W = 20 cm, 1200 disks, D = 4.5 cm, theta = 45 deg: fill, settle, then the settled
@@ -18,13 +19,16 @@
 // Settings: published = gear4, delta 50, no contact corrections (campaigns/paper); default = the
 // engine's IntegratorParams as they stand (what a sweep file without [integrator] gets);
 // --scheme, --delta and --corrections override the setting's integrator; --settle-only 1 stops
-// after phi (no discharge: rate, jams and flow time are then those of no discharge).
+// after phi (no discharge: rate, jams and flow time are then those of no discharge);
+// --settle-ke and --settle-hold override the settle's stopping rule (protocol.settle_ke,
+// protocol.settle_hold_s; issue 41: one build against itself at two rules).
 // phi: the area of the disks whose centres lie in the window over the window's area; the window
 // spans the column's width less 2 d_large on each side, from 2 d_large above the funnel's top
 // to 3 d_large below the packing's highest centre. The same estimator on both builds, so its
 // small bias at the window's edges cancels in the comparison.
 // One JSON object per seed and line on stdout (or --out): scene, setting, seed, status, phi,
-// settle_time (simulated s to rest), rate, jams, flow_time, discharged, cpu_s.
+// settle_time (simulated s to rest), rate, jams, flow_time, discharged, settle_steps,
+// settle_cpu_s (CPU s of fill and settle), cpu_s.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -47,13 +51,17 @@ struct Options {
     double delta = -1;         // --delta: steps per collision time
     int corrections = -1;      // --corrections 0|1
     bool settle_only = false;  // --settle-only 1: phi only, no discharge
+    double settle_ke = -1;     // --settle-ke: protocol.settle_ke (m_large g d_large)
+    double settle_hold = -1;   // --settle-hold: protocol.settle_hold_s (s)
 };
 
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
                  "bench_engine_change: %s\nusage: bench_engine_change --scene discharge|jamming "
                  "--setting published|default [--seeds N] [--first S] [--D CM] [--theta DEG] "
-                 "[--width CM] [--particles N] [--max-time S] [--out FILE]\n",
+                 "[--width CM] [--particles N] [--max-time S] [--out FILE] [--scheme gear4|verlet] "
+                 "[--delta N] [--corrections 0|1] [--settle-only 1] [--settle-ke X] "
+                 "[--settle-hold S]\n",
                  why.c_str());
     std::exit(2);
 }
@@ -93,6 +101,10 @@ Options parse(int argc, char** argv) {
                 o.corrections = std::stoi(v);
             else if (a == "--settle-only")
                 o.settle_only = std::stoi(v) != 0;
+            else if (a == "--settle-ke")
+                o.settle_ke = std::stod(v);
+            else if (a == "--settle-hold")
+                o.settle_hold = std::stod(v);
             else
                 usage("unknown option " + a);
         } catch (const std::logic_error&) {
@@ -104,6 +116,10 @@ Options parse(int argc, char** argv) {
     if (o.setting != "published" && o.setting != "default")
         usage("--setting: '" + o.setting + "' (allowed: published, default)");
     if (o.seeds < 1 || o.first < 0) usage("--seeds must be >= 1 and --first >= 0");
+    if (o.settle_ke != -1 && !(o.settle_ke > 0 && o.settle_ke <= 1))
+        usage("--settle-ke must lie in (0, 1]");
+    if (o.settle_hold != -1 && !(o.settle_hold > 0 && o.settle_hold <= 100))
+        usage("--settle-hold must lie in (0, 100] s");
     if (!o.scheme.empty() && o.scheme != "gear4" && o.scheme != "verlet")
         usage("--scheme: '" + o.scheme + "' (allowed: gear4, verlet)");
     return o;
@@ -127,6 +143,8 @@ SceneParams scene(const Options& o) {
         p.integrator.scheme = o.scheme == "gear4" ? Scheme::gear4 : Scheme::verlet;
     if (o.delta > 0) p.integrator.steps_per_collision = o.delta;
     if (o.corrections >= 0) p.integrator.contact_corrections = o.corrections != 0;
+    if (o.settle_ke > 0) p.protocol.settle_ke = o.settle_ke;
+    if (o.settle_hold > 0) p.protocol.settle_hold = o.settle_hold;
     return p;
 }
 
@@ -168,6 +186,7 @@ int main(int argc, char** argv) {
         const std::clock_t c0 = std::clock();
         Realization r(p, seed);
         r.settle();
+        const double settle_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
         const double phi = packing_fraction(r.system(), p);
         if (!o.settle_only) {
             r.open();
@@ -189,6 +208,8 @@ int main(int argc, char** argv) {
         std::fprintf(f, ", \"jams\": %d", res.n_jams);
         number(f, "flow_time", flow);
         std::fprintf(f, ", \"discharged\": %d", res.discharged);
+        std::fprintf(f, ", \"settle_steps\": %lld", (long long)res.diagnostics.settle_steps);
+        number(f, "settle_cpu_s", settle_cpu);
         number(f, "cpu_s", cpu);
         std::fprintf(f, "}\n");
         std::fflush(f);

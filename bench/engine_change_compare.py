@@ -12,6 +12,8 @@ builds and z = (new - old) / sqrt(se_old^2 + se_new^2):
   tau         mean survival time, the censored maximum-likelihood mean: flowing time / jams;
               its z compares ln tau, whose standard error is 1/sqrt(jams)
   cpu         CPU seconds per realization (cost, not a statistic to agree: ratio new/old)
+  settle      simulated seconds to rest and CPU seconds of fill and settle (when the lines have
+              them; cost, not statistics to agree: a change of the stopping rule moves them)
 Exit status 1 when a realization did not complete, when the seeds of the two files differ, or
 when |z| > 3 anywhere (a difference the errors do not explain); 0 otherwise.
 """
@@ -95,6 +97,13 @@ def compare(old, new):
                 lines.append(f"| {key[0]} | {key[1]} | tau (s) | {ta:.3f} +- {ta / math.sqrt(ja):.3f} "
                              f"({ja} jams) | {tb:.3f} +- {tb / math.sqrt(jb):.3f} ({jb} jams) | "
                              f"{len(a)} / {len(b)} | {z:+.2f} |")
+        if all("settle_cpu_s" in r for r in a + b):
+            for name, label in (("settle_time", "settle time (simulated s)"),
+                                ("settle_cpu_s", "settle cpu s per realization")):
+                ma, ea, _ = mean_se([r[name] for r in a])
+                mb, eb, _ = mean_se([r[name] for r in b])
+                lines.append(f"| {key[0]} | {key[1]} | {label} | {fmt(ma, ea, 3)} | "
+                             f"{fmt(mb, eb, 3)} | {len(a)} / {len(b)} | new/old {mb / ma:.2f} |")
         ca, cb = sum(r["cpu_s"] for r in a), sum(r["cpu_s"] for r in b)
         lines.append(f"| {key[0]} | {key[1]} | cpu s per realization | {ca / len(a):.2f} | "
                      f"{cb / len(b):.2f} | {len(a)} / {len(b)} | new/old {cb / ca * len(a) / len(b):.2f} |")
