@@ -7,7 +7,7 @@
 //                       [--seeds N] [--first S] [--D CM] [--theta DEG] [--width CM]
 //                       [--particles N] [--max-time S] [--out FILE]
 //                       [--scheme gear4|verlet] [--delta N] [--corrections 0|1] [--settle-only 1]
-//                       [--settle-ke X] [--settle-hold S]
+//                       [--settle-ke X] [--settle-hold S] [--settle-delta N]
 //
 // Scenes (the published bidisperse disks and material, tau_c = 8e-4 s):
 //   discharge  W = 20 cm, 1200 disks, D = 4.5 cm, theta = 45 deg: fill, settle, then the settled
@@ -21,7 +21,8 @@
 // --scheme, --delta and --corrections override the setting's integrator; --settle-only 1 stops
 // after phi (no discharge: rate, jams and flow time are then those of no discharge);
 // --settle-ke and --settle-hold override the settle's stopping rule (protocol.settle_ke,
-// protocol.settle_hold_s; issue 41: one build against itself at two rules).
+// protocol.settle_hold_s; issue 41: one build against itself at two rules); --settle-delta the
+// settle's time step (integrator.settle_steps_per_collision).
 // phi: the area of the disks whose centres lie in the window over the window's area; the window
 // spans the column's width less 2 d_large on each side, from 2 d_large above the funnel's top
 // to 3 d_large below the packing's highest centre. The same estimator on both builds, so its
@@ -53,6 +54,7 @@ struct Options {
     bool settle_only = false;  // --settle-only 1: phi only, no discharge
     double settle_ke = -1;     // --settle-ke: protocol.settle_ke (m_large g d_large)
     double settle_hold = -1;   // --settle-hold: protocol.settle_hold_s (s)
+    double settle_delta = -1;  // --settle-delta: integrator.settle_steps_per_collision
 };
 
 [[noreturn]] void usage(const std::string& why) {
@@ -60,7 +62,7 @@ struct Options {
                  "bench_engine_change: %s\nusage: bench_engine_change --scene discharge|jamming "
                  "--setting published|default [--seeds N] [--first S] [--D CM] [--theta DEG] "
                  "[--width CM] [--particles N] [--max-time S] [--out FILE] [--scheme gear4|verlet] "
-                 "[--delta N] [--corrections 0|1] [--settle-only 1] [--settle-ke X] "
+                 "[--delta N] [--corrections 0|1] [--settle-only 1] [--settle-ke X] [--settle-delta N] "
                  "[--settle-hold S]\n",
                  why.c_str());
     std::exit(2);
@@ -101,6 +103,8 @@ Options parse(int argc, char** argv) {
                 o.corrections = std::stoi(v);
             else if (a == "--settle-only")
                 o.settle_only = std::stoi(v) != 0;
+            else if (a == "--settle-delta")
+                o.settle_delta = std::stod(v);
             else if (a == "--settle-ke")
                 o.settle_ke = std::stod(v);
             else if (a == "--settle-hold")
@@ -118,6 +122,8 @@ Options parse(int argc, char** argv) {
     if (o.seeds < 1 || o.first < 0) usage("--seeds must be >= 1 and --first >= 0");
     if (o.settle_ke != -1 && !(o.settle_ke > 0 && o.settle_ke <= 1))
         usage("--settle-ke must lie in (0, 1]");
+    if (o.settle_delta != -1 && !(o.settle_delta >= 2 && o.settle_delta <= 1e5))
+        usage("--settle-delta must lie in [2, 1e5]");
     if (o.settle_hold != -1 && !(o.settle_hold > 0 && o.settle_hold <= 100))
         usage("--settle-hold must lie in (0, 100] s");
     if (!o.scheme.empty() && o.scheme != "gear4" && o.scheme != "verlet")
@@ -145,6 +151,7 @@ SceneParams scene(const Options& o) {
     if (o.corrections >= 0) p.integrator.contact_corrections = o.corrections != 0;
     if (o.settle_ke > 0) p.protocol.settle_ke = o.settle_ke;
     if (o.settle_hold > 0) p.protocol.settle_hold = o.settle_hold;
+    if (o.settle_delta > 0) p.integrator.settle_steps_per_collision = o.settle_delta;
     return p;
 }
 

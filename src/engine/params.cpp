@@ -206,6 +206,13 @@ void validate_particles_and_material(const SceneParams& p) {
     if (m.collision_time)
         require_range("material.collision_time", *m.collision_time, 1e-9, 1.0, false, " s");
     require_range("integrator.steps_per_collision", p.integrator.steps_per_collision, 2.0, 1e5);
+    if (const double sd = p.integrator.settle_steps_per_collision;
+        sd != 0.0 && !(std::isfinite(sd) && sd >= 2.0 && sd <= 1e5)) {
+        std::ostringstream msg;
+        msg << "parameter integrator.settle_steps_per_collision = " << sd
+            << " is out of range: allowed 0 (the settle at steps_per_collision) or [2, 1e5]";
+        throw ConfigError(msg.str());
+    }
     require_range("integrator.skin", p.integrator.skin, 0.0, 10.0, true);
     require_range("gravity", p.gravity, 0.0, 1e3, true, " m/s^2");
 }
@@ -427,12 +434,15 @@ DerivedConstants derive_constants(const SceneParams& p) {
     c.gamma_n_system = normal_damping_rate(mat.normal_damping, mat.system.e_n, c.tau_c);
     c.gamma_n_wall = normal_damping_rate(mat.normal_damping, mat.wall.e_n, c.tau_c);
     c.dt = c.tau_c / p.integrator.steps_per_collision;
+    c.settle_dt = p.integrator.settle_steps_per_collision > 0.0
+                      ? c.tau_c / p.integrator.settle_steps_per_collision
+                      : c.dt;
     c.t_check = p.protocol.t_check.value_or(2.0 * std::sqrt(s.d_large / p.gravity));
     // Every value is in range on its own; their combination must still give usable numbers.
     const std::pair<const char*, double> derived[] = {
         {"m_small", c.m_small}, {"m_large", c.m_large},        {"tau_c", c.tau_c},
         {"k_n", c.k_n},         {"gamma_n", c.gamma_n_system}, {"gamma_n (walls)", c.gamma_n_wall},
-        {"dt", c.dt},           {"t_check", c.t_check}};
+        {"dt", c.dt},           {"t_check", c.t_check},        {"settle dt", c.settle_dt}};
     for (const auto& [name, v] : derived)
         if (!std::isfinite(v) || (v <= 0.0 && std::string_view(name).substr(0, 7) != "gamma_n")) {
             std::ostringstream msg;

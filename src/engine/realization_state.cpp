@@ -105,6 +105,9 @@ void Realization::Impl::restore_state(std::span<const std::uint8_t> bytes) {
     detail::describe(io, static_cast<detail::ProtocolState&>(*this));
     restore_result(res, r, version);
     CheckpointAccess::restore(*sys, r);
+    // The saved derivatives are scaled to the phase's own step (integrator.settle_steps_per_
+    // collision while settling): taken as they are.
+    sys->set_time_step(phase == Phase::settle ? c.settle_dt : c.dt, false);
     remember_reinserted();
     if (phase != Phase::settle) put_lid();
     fields.acc.reset();

@@ -88,6 +88,21 @@ System::System(const SystemConfig& config) : config_(config) {
 
 System::~System() = default;
 
+void System::set_time_step(double dt, bool rescale) {
+    if (!(dt > 0.0) || !std::isfinite(dt))
+        throw core::ConfigError("System: the time step must be positive and finite");
+    if (ready_ && rescale && dt != config_.dt) {
+        const double q = dt / config_.dt;
+        const double scale[3] = {q * q, q * q * q, q * q * q * q};  // r_2, r_3, r_4
+        const auto h = history_columns(*this);
+        for (std::size_t c = 0; c < h.size(); ++c)
+            for (double& v : *h[c])
+                v *= scale[c % 3];
+    }
+    config_.dt = dt;
+    ahead_ = false;  // the fused predictor's look-ahead was for the old step
+}
+
 void System::set_kernel(KernelPath p) {
     kernel_path_ = p == KernelPath::reference ? p : detail::resolve_kernel(p);
 }

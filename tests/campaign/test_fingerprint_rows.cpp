@@ -186,6 +186,9 @@ std::string frozen_scene_text(const engine::SceneParams& p) {
         l.add("protocol.lid_gravity", q.lid_gravity);
         l.add("protocol.lid_depth", q.lid_depth);
     }
+    // The settle's own time step (issue 41): only off its default, 0 (the settle at dt).
+    if (p.integrator.settle_steps_per_collision != d.integrator.settle_steps_per_collision)
+        l.add("integrator.settle_steps_per_collision", p.integrator.settle_steps_per_collision);
     return l.take();
 }
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <random>
 
+#include "hopper/core/error.hpp"
 #include "physics_fixture.hpp"
 
 namespace {
@@ -156,6 +157,52 @@ TEST(IntegratorOrder, HarmonicContactConvergesAtTheSchemesOrder) {
             EXPECT_LT(e1, 1e-5);
         }
     }
+}
+
+// A change of time step mid-run (System::set_time_step; the settle's own step, issue 41): the
+// oscillator above run T/2 at delta = 50 and T/2 at delta = 100. With Gear's scaled derivatives
+// carried over (r_k times 2^-k) the error stays that of the coarser half, at most the error of
+// the whole run at delta = 50; taken as they were, the derivatives are 4 to 16 times too large
+// for the new step and the trajectory jumps (measured: hundreds of times the error). Verlet
+// carries no scaled history: the change is exact for it either way.
+double switched_error(Scheme scheme, bool rescale, double T) {
+    const ContactParams cp = contact_params(1.0, 0.0);
+    System s(system_config(scheme, 50.0, cp, cp, Vec2(0.0, -g)));
+    const double d = d_large, R = 0.5 * d, m = disk_mass(d);
+    s.add_wall(Vec2(0.0, -2.0 * R), d);
+    const double x_eq = m * g / k_n, A = 0.5 * x_eq;
+    const int id = add_disk(s, Vec2(0.0, -(x_eq + A)), d);
+    const double dt = s.dt();
+    const auto half = std::llround(0.5 * T / dt);
+    s.run(half);
+    s.set_time_step(0.5 * dt, rescale);
+    EXPECT_DOUBLE_EQ(s.dt(), 0.5 * dt);
+    s.run(2 * half);
+    const double t = s.time(), omega = std::sqrt(k_n / m);
+    EXPECT_NEAR(t, 2.0 * half * dt, 1e-9 * T);
+    const double y_exact = -(x_eq + A * std::cos(omega * t));
+    return std::abs(s.position(s.index_of(id)).y() - y_exact) / A;
+}
+
+TEST(IntegratorStep, AChangeOfTimeStepCarriesGearsDerivativesOver) {
+    const double T = 1200 * tau_c / 50.0;
+    for (Scheme scheme : {Scheme::gear4, Scheme::verlet}) {
+        const double whole50 = oscillator_error(scheme, 50.0, T);
+        const double carried = switched_error(scheme, true, T);
+        const double as_they_were = switched_error(scheme, false, T);
+        std::printf("[ measured ] %s: |y - y_exact| / A = %.3e (delta 50 throughout), %.3e "
+                    "(50 then 100, carried over), %.3e (not rescaled)\n",
+                    to_string(scheme).c_str(), whole50, carried, as_they_were);
+        EXPECT_LT(carried, 1.05 * whole50) << to_string(scheme);
+        if (scheme == Scheme::gear4)
+            EXPECT_GT(as_they_were, 100.0 * whole50);
+        else
+            EXPECT_EQ(as_they_were, carried);
+    }
+    const ContactParams cp = contact_params(1.0, 0.0);
+    System s(system_config(Scheme::gear4, 50.0, cp, cp, Vec2(0.0, -g)));
+    EXPECT_THROW(s.set_time_step(0.0), hopper::core::ConfigError);
+    EXPECT_THROW(s.set_time_step(std::nan("")), hopper::core::ConfigError);
 }
 
 }  // namespace

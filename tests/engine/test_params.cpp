@@ -189,6 +189,11 @@ TEST(Params, ValidateRejectsNonsense) {
     sp = SceneParams{};
     sp.integrator.steps_per_collision = 1.0;
     expect_rejected(sp, {"steps_per_collision"});
+    for (double bad : {1.0, -25.0, 2e5, std::nan("")}) {  // 0 (the default) or [2, 1e5]
+        sp = SceneParams{};
+        sp.integrator.settle_steps_per_collision = bad;
+        expect_rejected(sp, {"settle_steps_per_collision", "0 (the settle at"});
+    }
     sp = SceneParams{};
     sp.material.collision_time = -1e-4;
     expect_rejected(sp, {"collision_time"});

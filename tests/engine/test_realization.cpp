@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <vector>
 
@@ -63,6 +64,30 @@ void expect_consistent(const RealizationResult& r) {
 }
 
 }  // namespace
+
+// integrator.settle_steps_per_collision (issue 41): the settle steps at tau_c / 25, the
+// discharge at tau_c / 50 (the steps of each phase counted against its simulated time), and
+// the realization ends as the protocol says. Unset, the settle steps at dt.
+TEST(Realization, TheSettleStepsAtItsOwnTimeStepAndTheDischargeAtDt) {
+    SceneParams p = tiny(4.5, 60.0);
+    p.integrator.settle_steps_per_collision = 25.0;
+    const RealizationResult r = run_realization(p, 1);
+    expect_consistent(r);
+    ASSERT_EQ(r.status, Status::complete) << r.message;
+    const double dt = 8.0e-4 / 50.0, settle_dt = 8.0e-4 / 25.0;
+    EXPECT_DOUBLE_EQ(r.diagnostics.dt, dt);
+    EXPECT_NEAR(double(r.diagnostics.settle_steps), r.diagnostics.settle_time / settle_dt, 1.0);
+    ASSERT_TRUE(r.empty_time.has_value());
+    const double discharge_steps = double(r.diagnostics.steps - r.diagnostics.settle_steps);
+    EXPECT_GE(discharge_steps + 1.0, *r.empty_time / dt);  // and the shakes' steps, if any
+    EXPECT_LT(discharge_steps, (*r.empty_time + 0.5) / dt);
+    const RealizationResult plain = run_realization(tiny(4.5, 60.0), 1);
+    EXPECT_NEAR(double(plain.diagnostics.settle_steps), plain.diagnostics.settle_time / dt, 1.0);
+    std::printf("[ measured ] settle: %lld steps (%.3f s) at tau_c/25, %lld (%.3f s) at "
+                "tau_c/50\n",
+                (long long)r.diagnostics.settle_steps, r.diagnostics.settle_time,
+                (long long)plain.diagnostics.settle_steps, plain.diagnostics.settle_time);
+}
 
 TEST(Realization, WideOutletEmptiesWithoutJamming) {
     const RealizationResult r = run_realization(tiny(4.5, 60.0), 1);

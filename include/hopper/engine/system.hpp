@@ -189,6 +189,12 @@ class System {
     // Switches the force pass (bench_engine --paths compares them on one trajectory; the bits
     // do not change). ConfigError if this CPU cannot run it.
     void set_kernel(KernelPath p);
+    // A new time step from the next step on (the settle's own, docs/model.md, "Realization
+    // protocol"). With `rescale`, Gear's scaled derivatives r_k = dt^k/k! d^k r/dt^k are carried
+    // over to it (times (dt_new/dt_old)^k), so that the trajectory continues smoothly; without,
+    // they are taken as already scaled to dt_new (a restored checkpoint). Before the first step
+    // it only sets dt (the priming uses it). ConfigError for a dt that is not positive and finite.
+    void set_time_step(double dt, bool rescale = true);
     // The arrangement of the integrator's passes (StepFusion; none by default). The bits do
     // not change (test_kernel_paths); for tests and bench_engine --fusion.
     void set_step_fusion(StepFusion f);
