@@ -58,13 +58,14 @@ struct Options {
 };
 
 [[noreturn]] void usage(const std::string& why) {
-    std::fprintf(stderr,
-                 "bench_engine_change: %s\nusage: bench_engine_change --scene discharge|jamming "
-                 "--setting published|default [--seeds N] [--first S] [--D CM] [--theta DEG] "
-                 "[--width CM] [--particles N] [--max-time S] [--out FILE] [--scheme gear4|verlet] "
-                 "[--delta N] [--corrections 0|1] [--settle-only 1] [--settle-ke X] [--settle-delta N] "
-                 "[--settle-hold S]\n",
-                 why.c_str());
+    std::fprintf(
+        stderr,
+        "bench_engine_change: %s\nusage: bench_engine_change --scene discharge|jamming "
+        "--setting published|default [--seeds N] [--first S] [--D CM] [--theta DEG] "
+        "[--width CM] [--particles N] [--max-time S] [--out FILE] [--scheme gear4|verlet] "
+        "[--delta N] [--corrections 0|1] [--settle-only 1] [--settle-ke X] [--settle-delta N] "
+        "[--settle-hold S]\n",
+        why.c_str());
     std::exit(2);
 }
 

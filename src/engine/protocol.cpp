@@ -44,7 +44,7 @@ Realization::Impl::Impl(const SceneParams& params, std::uint64_t seed, RunHooks 
     k_settle = detail::every(1e-3, c.settle_dt);
     // The settle's own time step (integrator.settle_steps_per_collision), set before the first
     // step: the priming scales Gear's derivatives to it. open() goes back to dt.
-    if (c.settle_dt != c.dt) sys->set_time_step(c.settle_dt);
+    sys->set_time_step(c.settle_dt);
     // Mean kinetic energy per particle can never exceed the potential energy of a fall from
     // the top of the walls to the removal floor (plus shaking); 100x that is a blow-up.
     const double drop =
@@ -90,7 +90,7 @@ void Realization::Impl::settle() {
 
 // ----- open (step 3) ----------------------------------------------------------------------
 void Realization::Impl::open() {
-    if (c.settle_dt != c.dt) sys->set_time_step(c.dt);  // Gear's derivatives carried over
+    sys->set_time_step(c.dt);  // from the settle's own step, Gear's derivatives carried over
     sys->remove_walls(gate_ids);
     sys->set_removal_floor(det.y_outlet - p.protocol.exit_depth * p.particles.d_large);
     phase = Phase::discharge;

@@ -91,7 +91,8 @@ System::~System() = default;
 void System::set_time_step(double dt, bool rescale) {
     if (!(dt > 0.0) || !std::isfinite(dt))
         throw core::ConfigError("System: the time step must be positive and finite");
-    if (ready_ && rescale && dt != config_.dt) {
+    if (dt == config_.dt) return;
+    if (ready_ && rescale) {
         const double q = dt / config_.dt;
         const double scale[3] = {q * q, q * q * q, q * q * q * q};  // r_2, r_3, r_4
         const auto h = history_columns(*this);

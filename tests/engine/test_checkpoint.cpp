@@ -133,9 +133,9 @@ TEST_P(CheckpointResume, StoppedAtRandomStepsAndResumedEndsBitIdentical) {
     std::int64_t in_shake = -1;
     for (const Event& e : ref.events)
         if (e.kind == Event::Kind::shake_start) {  // the settle's steps may be of another size
-            in_shake = settle +
-                       std::llround((e.sim_time - ref.diagnostics.settle_time) / ref.diagnostics.dt) +
-                       7;
+            in_shake =
+                settle +
+                std::llround((e.sim_time - ref.diagnostics.settle_time) / ref.diagnostics.dt) + 7;
             break;
         }
     ASSERT_GT(in_shake, 0);

@@ -190,9 +190,10 @@ TEST(IntegratorStep, AChangeOfTimeStepCarriesGearsDerivativesOver) {
         const double whole50 = oscillator_error(scheme, 50.0, T);
         const double carried = switched_error(scheme, true, T);
         const double as_they_were = switched_error(scheme, false, T);
-        std::printf("[ measured ] %s: |y - y_exact| / A = %.3e (delta 50 throughout), %.3e "
-                    "(50 then 100, carried over), %.3e (not rescaled)\n",
-                    to_string(scheme).c_str(), whole50, carried, as_they_were);
+        std::printf(
+            "[ measured ] %s: |y - y_exact| / A = %.3e (delta 50 throughout), %.3e "
+            "(50 then 100, carried over), %.3e (not rescaled)\n",
+            to_string(scheme).c_str(), whole50, carried, as_they_were);
         EXPECT_LT(carried, 1.05 * whole50) << to_string(scheme);
         if (scheme == Scheme::gear4)
             EXPECT_GT(as_they_were, 100.0 * whole50);

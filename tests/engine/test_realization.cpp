@@ -83,10 +83,11 @@ TEST(Realization, TheSettleStepsAtItsOwnTimeStepAndTheDischargeAtDt) {
     EXPECT_LT(discharge_steps, (*r.empty_time + 0.5) / dt);
     const RealizationResult plain = run_realization(tiny(4.5, 60.0), 1);
     EXPECT_NEAR(double(plain.diagnostics.settle_steps), plain.diagnostics.settle_time / dt, 1.0);
-    std::printf("[ measured ] settle: %lld steps (%.3f s) at tau_c/25, %lld (%.3f s) at "
-                "tau_c/50\n",
-                (long long)r.diagnostics.settle_steps, r.diagnostics.settle_time,
-                (long long)plain.diagnostics.settle_steps, plain.diagnostics.settle_time);
+    std::printf(
+        "[ measured ] settle: %lld steps (%.3f s) at tau_c/25, %lld (%.3f s) at "
+        "tau_c/50\n",
+        (long long)r.diagnostics.settle_steps, r.diagnostics.settle_time,
+        (long long)plain.diagnostics.settle_steps, plain.diagnostics.settle_time);
 }
 
 TEST(Realization, WideOutletEmptiesWithoutJamming) {

@@ -193,7 +193,8 @@ class System {
     // protocol"). With `rescale`, Gear's scaled derivatives r_k = dt^k/k! d^k r/dt^k are carried
     // over to it (times (dt_new/dt_old)^k), so that the trajectory continues smoothly; without,
     // they are taken as already scaled to dt_new (a restored checkpoint). Before the first step
-    // it only sets dt (the priming uses it). ConfigError for a dt that is not positive and finite.
+    // it only sets dt (the priming uses it); the same dt changes nothing. ConfigError for a dt
+    // that is not positive and finite.
     void set_time_step(double dt, bool rescale = true);
     // The arrangement of the integrator's passes (StepFusion; none by default). The bits do
     // not change (test_kernel_paths); for tests and bench_engine --fusion.
