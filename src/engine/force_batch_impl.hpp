@@ -3,7 +3,8 @@
 // between differently compiled objects), HOPPER_FORCE_TABLE (the name of its table getter) and
 // HOPPER_FORCE_SIMDLEN, the lanes of the law's loop: 1 for the reference pass (scalar code,
 // force_batch_reference.cpp), 2, 4 and 8 for the batched passes of the baseline, AVX2 and
-// AVX-512 builds. No include guard: one inclusion per translation unit.
+// AVX-512 builds (16 in the one with hardware gathers). No include guard: one inclusion per
+// translation unit.
 //
 // One pass for every build (round 3, third session; issue 42): block by block of block_rows
 // particles, per kind of partner (mobile, then wall),
