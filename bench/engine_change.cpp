@@ -3,7 +3,7 @@
 // bench/engine_change/compare.py sets side by side (means, errors, z). Method and results:
 // docs/performance.md, "Statistical validation of the new formulation".
 //
-//   bench_engine_change --scene discharge|jamming --setting published|default
+//   bench_engine_change --scene discharge|jamming --setting published|calibrated|default
 //                       [--seeds N] [--first S] [--D CM] [--theta DEG] [--width CM]
 //                       [--particles N] [--max-time S] [--out FILE]
 //                       [--scheme gear4|verlet] [--delta N] [--corrections 0|1] [--settle-only 1]
@@ -16,8 +16,10 @@
 //   jamming    W = 12 cm, 500 disks, D = 2.3 cm, theta = 45 deg, 30 s of discharge at most, the
 //              published shakes: jams, flowing time (the sum of the survival intervals), and
 //              the settled phi as above.
-// Settings: published = gear4, delta 50, no contact corrections (campaigns/paper); default = the
-// engine's IntegratorParams as they stand (what a sweep file without [integrator] gets);
+// Settings: published = gear4, delta 50, no contact corrections (campaigns/paper); calibrated =
+// published with issue 39's calibrated walls and shakes (campaigns/paper-calibrated-2026-12:
+// wall spacing 0.5, edge offset 0.15, shake growth 1.5 up to one d_large, 50 shakes); default =
+// the engine's IntegratorParams as they stand (what a sweep file without [integrator] gets);
 // --scheme, --delta and --corrections override the setting's integrator; --settle-only 1 stops
 // after phi (no discharge: rate, jams and flow time are then those of no discharge);
 // --settle-ke and --settle-hold override the settle's stopping rule (protocol.settle_ke,
@@ -61,7 +63,7 @@ struct Options {
     std::fprintf(
         stderr,
         "bench_engine_change: %s\nusage: bench_engine_change --scene discharge|jamming "
-        "--setting published|default [--seeds N] [--first S] [--D CM] [--theta DEG] "
+        "--setting published|calibrated|default [--seeds N] [--first S] [--D CM] [--theta DEG] "
         "[--width CM] [--particles N] [--max-time S] [--out FILE] [--scheme gear4|verlet] "
         "[--delta N] [--corrections 0|1] [--settle-only 1] [--settle-ke X] [--settle-delta N] "
         "[--settle-hold S]\n",
@@ -118,8 +120,8 @@ Options parse(int argc, char** argv) {
     }
     if (o.scene != "discharge" && o.scene != "jamming")
         usage("--scene: '" + o.scene + "' (allowed: discharge, jamming)");
-    if (o.setting != "published" && o.setting != "default")
-        usage("--setting: '" + o.setting + "' (allowed: published, default)");
+    if (o.setting != "published" && o.setting != "calibrated" && o.setting != "default")
+        usage("--setting: '" + o.setting + "' (allowed: published, calibrated, default)");
     if (o.seeds < 1 || o.first < 0) usage("--seeds must be >= 1 and --first >= 0");
     if (o.settle_ke != -1 && !(o.settle_ke > 0 && o.settle_ke <= 1))
         usage("--settle-ke must lie in (0, 1]");
@@ -141,10 +143,17 @@ SceneParams scene(const Options& o) {
     p.particles.count = o.particles > 0 ? o.particles : discharge ? 1200 : 500;
     p.material.collision_time = 8.0e-4;
     p.protocol.max_time = o.max_time > 0 ? o.max_time : discharge ? 600.0 : 30.0;
-    if (o.setting == "published") {
+    if (o.setting == "published" || o.setting == "calibrated") {
         p.integrator.scheme = Scheme::gear4;
         p.integrator.steps_per_collision = 50.0;
         p.integrator.contact_corrections = false;
+    }
+    if (o.setting == "calibrated") {  // campaigns/paper-calibrated-2026-12 (issue 39)
+        p.hopper.wall_spacing = 0.5;
+        p.hopper.edge_offset = 0.15;
+        p.protocol.shake_growth = 1.5;
+        p.protocol.shake_amplitude_max = 1.0;
+        p.protocol.max_shakes = 50;
     }
     if (!o.scheme.empty())
         p.integrator.scheme = o.scheme == "gear4" ? Scheme::gear4 : Scheme::verlet;
