@@ -30,8 +30,9 @@
 // to 3 d_large below the packing's highest centre. The same estimator on both builds, so its
 // small bias at the window's edges cancels in the comparison.
 // One JSON object per seed and line on stdout (or --out): scene, setting, seed, status, phi,
-// settle_time (simulated s to rest), rate, jams, flow_time, discharged, settle_steps,
-// settle_cpu_s (CPU s of fill and settle), cpu_s.
+// settle_time (simulated s to rest), rate, jams, shakes, multi_shake (jams that needed more
+// than one shake), flow_time, discharged, settle_steps, settle_cpu_s (CPU s of fill and
+// settle), cpu_s.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -223,6 +224,8 @@ int main(int argc, char** argv) {
         number(f, "settle_time", res.diagnostics.settle_time);
         number(f, "rate", res.discharge_rate ? *res.discharge_rate : std::nan(""));
         std::fprintf(f, ", \"jams\": %d", res.n_jams);
+        std::fprintf(f, ", \"shakes\": %d, \"multi_shake\": %d", res.n_shakes,
+                     res.n_jams_multi_shake);
         number(f, "flow_time", flow);
         std::fprintf(f, ", \"discharged\": %d", res.discharged);
         std::fprintf(f, ", \"settle_steps\": %lld", (long long)res.diagnostics.settle_steps);

@@ -11,10 +11,15 @@ builds and z = (new - old) / sqrt(se_old^2 + se_new^2):
   jams        jams per realization (jamming scene)
   tau         mean survival time, the censored maximum-likelihood mean: flowing time / jams;
               its z compares ln tau, whose standard error is 1/sqrt(jams)
+  shakes      (jamming scene, when the lines have them) shakes per jam, and the share of jams
+              that needed more than one shake (z of two proportions over the jams); arrested
+              realizations (a jam that max_shakes did not clear: a status of the protocol, counted
+              here, z of two proportions over the realizations)
   cpu         CPU seconds per realization (cost, not a statistic to agree: ratio new/old)
   settle      simulated seconds to rest and CPU seconds of fill and settle (when the lines have
               them; cost, not statistics to agree: a change of the stopping rule moves them)
-Exit status 1 when a realization did not complete, when the seeds of the two files differ, or
+Exit status 1 when a realization did not complete (arrested counts as complete in the jamming
+scene: it is an outcome of the protocol, compared as above), when the seeds of the two files differ, or
 when |z| > 3 anywhere (a difference the errors do not explain); 0 otherwise.
 """
 import argparse
@@ -53,6 +58,13 @@ def z_of(a, sa, b, sb):
     return (b - a) / s if s > 0 else float("nan")
 
 
+def two_proportions(ka, na, kb, nb):
+    """z of kb/nb against ka/na, the pooled proportion's standard error (NaN when it is 0)."""
+    p = (ka + kb) / (na + nb)
+    s = math.sqrt(p * (1 - p) * (1 / na + 1 / nb))
+    return (kb / nb - ka / na) / s if s > 0 else float("nan")
+
+
 def fmt(m, se, digits):
     return f"{m:.{digits}f} +- {se:.{digits}f}"
 
@@ -71,7 +83,8 @@ def compare(old, new):
             bad.append(f"{key[0]} {key[1]}: the two builds ran different seeds")
         for side, rows in (("old", a), ("new", b)):
             for r in rows:
-                if r["status"] not in ("complete", "settled"):
+                ok = ("complete", "settled") + (("arrested",) if key[0] == "jamming" else ())
+                if r["status"] not in ok:
                     bad.append(f"{key[0]} {key[1]} {side} seed {r['seed']}: {r['status']}")
         obs = [("phi", 4)]
         if key[0] == "discharge":
@@ -87,7 +100,7 @@ def compare(old, new):
             worst = max(worst, abs(z)) if not math.isnan(z) else worst
             lines.append(f"| {key[0]} | {key[1]} | {name} | {fmt(ma, ea, digits)} | "
                          f"{fmt(mb, eb, digits)} | {na} / {nb} | {z:+.2f} |")
-        if key[0] == "jamming" and all(r["status"] == "complete" for r in a + b):
+        if key[0] == "jamming" and all(r["status"] in ("complete", "arrested") for r in a + b):
             ja, jb = sum(r["jams"] for r in a), sum(r["jams"] for r in b)
             fa, fb = sum(r["flow_time"] for r in a), sum(r["flow_time"] for r in b)
             if ja and jb:
@@ -97,6 +110,24 @@ def compare(old, new):
                 lines.append(f"| {key[0]} | {key[1]} | tau (s) | {ta:.3f} +- {ta / math.sqrt(ja):.3f} "
                              f"({ja} jams) | {tb:.3f} +- {tb / math.sqrt(jb):.3f} ({jb} jams) | "
                              f"{len(a)} / {len(b)} | {z:+.2f} |")
+        if key[0] == "jamming" and all("shakes" in r for r in a + b):
+            ja, jb = sum(r["jams"] for r in a), sum(r["jams"] for r in b)
+            sha, shb = sum(r["shakes"] for r in a), sum(r["shakes"] for r in b)
+            if ja and jb:
+                ratio = f"new/old {shb / sha * ja / jb:.2f}" if sha else "-"
+                lines.append(f"| {key[0]} | {key[1]} | shakes per jam | {sha / ja:.3f} | "
+                             f"{shb / jb:.3f} | {len(a)} / {len(b)} | {ratio} |")
+                for label, ka, kb, na_, nb_ in (
+                        ("jams needing more than one shake",
+                         sum(r["multi_shake"] for r in a), sum(r["multi_shake"] for r in b), ja, jb),
+                        ("arrested realizations",
+                         sum(r["status"] == "arrested" for r in a),
+                         sum(r["status"] == "arrested" for r in b), len(a), len(b))):
+                    z = two_proportions(ka, na_, kb, nb_)
+                    if not math.isnan(z):
+                        worst = max(worst, abs(z))
+                    lines.append(f"| {key[0]} | {key[1]} | {label} | {ka} of {na_} | {kb} of {nb_} | "
+                                 f"{len(a)} / {len(b)} | {z:+.2f} |")
         if all("settle_cpu_s" in r for r in a + b):
             for name, label in (("settle_time", "settle time (simulated s)"),
                                 ("settle_cpu_s", "settle cpu s per realization")):

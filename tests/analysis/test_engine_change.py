@@ -8,6 +8,10 @@
    against 2.0 s): z on ln tau = (ln 1 - ln 2) / sqrt(1/30 + 1/60) = -3.10, exit 1.
 3. phi: old 0.80, 0.82 (mean 0.81, se 0.01), new 0.83, 0.85 (0.84, 0.01): z = +2.12, printed.
 4. A failed realization or different seeds: exit 1 with the problem named.
+5. Shakes (issue 41): 2 of 20 jams needed more than one shake against 10 of 20, z of two
+   proportions = 0.4 / sqrt(0.3 * 0.7 * (1/20 + 1/20)) = +2.76; one of the new build's two
+   realizations arrested (an outcome of the protocol, not a problem): 0 of 2 against 1 of 2,
+   z = 0.5 / sqrt(0.25 * 0.75 * 1) = +1.15; exit 0.
 """
 import json
 import math
@@ -82,6 +86,25 @@ check(rc == 1 and "seed 1: failed" in err, "a failed realization: exit 1, named"
 other = [row("jamming", 3, 0.80, 10, 20.0), row("jamming", 2, 0.82, 20, 40.0)]
 rc, out, err = run(same, other)
 check(rc == 1 and "different seeds" in err, "different seeds: exit 1, named")
+
+# 5. shakes and arrests
+def shaken(seed, jams, shakes, multi, status="complete"):
+    r = row("jamming", seed, 0.81, jams, 20.0, status=status)
+    r.update(shakes=shakes, multi_shake=multi)
+    return r
+
+
+old = [shaken(1, 10, 11, 1), shaken(2, 10, 11, 1)]
+new = [shaken(1, 10, 20, 5), shaken(2, 10, 25, 5, status="arrested")]
+rc, out, err = run(old, new)
+want = 0.4 / math.sqrt(0.3 * 0.7 * (1 / 20 + 1 / 20))
+got = z_in(out, "jams needing more than one shake")
+check(got is not None and abs(got - want) < 0.01, "multi-shake jams: z %s (by hand %.2f)" % (got, want))
+got = z_in(out, "arrested realizations")
+check(got is not None and abs(got - 0.5 / math.sqrt(0.1875)) < 0.01,
+      "arrested realizations: z %s (by hand %.2f)" % (got, 0.5 / math.sqrt(0.1875)))
+check("2.250" in out and "1.100" in out, "shakes per jam 1.100 and 2.250")
+check(rc == 0 and "arrested" not in err, "an arrested realization is counted, not a problem (rc %d)" % rc)
 
 print("%d failed" % fails)
 sys.exit(1 if fails else 0)
