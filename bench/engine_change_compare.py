@@ -1,9 +1,16 @@
 #!/usr/bin/python3
 """Side by side: the statistics of two engine builds from bench_engine_change (issue 25, part 2).
 
-    bench/engine_change_compare.py OLD.jsonl NEW.jsonl [--md FILE]
+    bench/engine_change_compare.py OLD NEW [--md FILE]
 
-Each file holds the JSON lines of bench_engine_change runs (any scenes and settings, one build).
+OLD and NEW are each either a file of the JSON lines of bench_engine_change runs (any scenes and
+settings, one build; the name ends in .jsonl) or whole realizations: a directory, or a quoted
+glob pattern, of `campaign simulate --json` outputs, one realization per file (issue 41: the
+full-size scene). Realizations form the scene "realization D=.. theta=..", setting "simulate",
+and are compared like the jamming scene: jams, tau, shakes, arrests, plus the discharge rate;
+a realization stopped at protocol.max_time_s (status time_limit) counts as complete, its last
+survival time censored. Their seeds need not match (different seeds are independent samples,
+and so are the same seeds under different bits); the table names both sets.
 Per scene and setting, the table gives each observable's mean and standard error for both
 builds and z = (new - old) / sqrt(se_old^2 + se_new^2):
   phi         settled packing fraction (every scene)
@@ -15,7 +22,8 @@ builds and z = (new - old) / sqrt(se_old^2 + se_new^2):
               that needed more than one shake (z of two proportions over the jams); arrested
               realizations (a jam that max_shakes did not clear: a status of the protocol, counted
               here, z of two proportions over the realizations)
-  cpu         CPU seconds per realization (cost, not a statistic to agree: ratio new/old)
+  cpu         CPU seconds per realization (cost, not a statistic to agree: ratio new/old); for
+              whole realizations the wall seconds they report
   settle      simulated seconds to rest and CPU seconds of fill and settle (when the lines have
               them; cost, not statistics to agree: a change of the stopping rule moves them)
 Exit status 1 when a realization did not complete (arrested counts as complete in the jamming
@@ -23,12 +31,40 @@ scene: it is an outcome of the protocol, compared as above), when the seeds of t
 differ, or when |z| > 3 anywhere (a difference the errors do not explain); 0 otherwise.
 """
 import argparse
+import glob
 import json
 import math
+import os
 import sys
 
 
+def realization_row(path):
+    """One `campaign simulate --json` output as a line of the comparison."""
+    try:
+        with open(path) as f:
+            d = json.load(f)
+        survival, censored = d["survival_times"], d["censored"]
+        if len(survival) != len(censored):
+            raise ValueError("survival_times and censored differ in length")
+        return {"scene": f"realization D={d['D_cm']:g} theta={d['theta_deg']:g}", "setting": "simulate",
+                "seed": d["seed"], "status": d["status"], "phi": None, "rate": d["discharge_rate"],
+                "jams": sum(1 for c in censored if not c), "flow_time": sum(survival),
+                "shakes": d["n_shakes"], "multi_shake": d["n_jams_multi_shake"],
+                "cpu_s": d["wall_seconds"]}
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        sys.exit(f"{path}: not a campaign simulate --json output ({e})")
+
+
 def load(path):
+    if not path.endswith(".jsonl"):
+        files = sorted(glob.glob(os.path.join(path, "*.json") if os.path.isdir(path) else path))
+        if not files:
+            sys.exit(f"{path}: no file (a .jsonl file, a directory of .json files or a glob pattern)")
+        rows = {}
+        for p in files:
+            r = realization_row(p)
+            rows.setdefault((r["scene"], r["setting"]), []).append(r)
+        return rows
     rows = {}
     with open(path) as f:
         for n, line in enumerate(f, 1):
@@ -51,6 +87,18 @@ def mean_se(v):
     m = sum(v) / n
     se = math.sqrt(sum((x - m) ** 2 for x in v) / (n - 1) / n) if n > 1 else float("nan")
     return m, se, n
+
+
+def ranges(seeds):
+    """1, 2, 3, 5 -> '1-3, 5'."""
+    out, i = [], 0
+    while i < len(seeds):
+        j = i
+        while j + 1 < len(seeds) and seeds[j + 1] == seeds[j] + 1:
+            j += 1
+        out.append(f"{seeds[i]}-{seeds[j]}" if j > i else f"{seeds[i]}")
+        i = j + 1
+    return ", ".join(out)
 
 
 def z_of(a, sa, b, sb):
@@ -79,19 +127,24 @@ def compare(old, new):
             bad.append(f"{key[0]} {key[1]}: only in {'old' if a else 'new'}")
             continue
         sa, sb = sorted(r["seed"] for r in a), sorted(r["seed"] for r in b)
-        if sa != sb:
+        whole = key[0].startswith("realization")
+        if whole:
+            lines.append(f"| {key[0]} | {key[1]} | seeds | {ranges(sa)} | {ranges(sb)} | "
+                         f"{len(a)} / {len(b)} | |")
+        elif sa != sb:
             bad.append(f"{key[0]} {key[1]}: the two builds ran different seeds")
-        jamming = key[0] == "jamming"
-        # arrested: an outcome of the jamming scene's protocol, counted below, not a problem
-        ok = ("complete", "settled") + (("arrested",) if jamming else ())
+        jamming = key[0] == "jamming" or whole
+        # arrested: an outcome of the jamming scene's protocol, counted below, not a problem;
+        # time_limit: a realization stopped at protocol.max_time_s, its last survival censored
+        ok = ("complete", "settled") + (("arrested",) if jamming else ()) + (("time_limit",) if whole else ())
         for side, rows in (("old", a), ("new", b)):
             for r in rows:
                 if r["status"] not in ok:
                     bad.append(f"{key[0]} {key[1]} {side} seed {r['seed']}: {r['status']}")
-        obs = [("phi", 4)]
-        if key[0] == "discharge":
+        obs = [] if whole else [("phi", 4)]
+        if key[0] == "discharge" or whole:
             obs.append(("rate", 1))
-        else:
+        if key[0] != "discharge":
             obs.append(("jams", 2))
         for name, digits in obs:
             ma, ea, na = mean_se([r[name] for r in a])
@@ -137,7 +190,8 @@ def compare(old, new):
                 lines.append(f"| {key[0]} | {key[1]} | {label} | {fmt(ma, ea, 3)} | "
                              f"{fmt(mb, eb, 3)} | {len(a)} / {len(b)} | new/old {mb / ma:.2f} |")
         ca, cb = sum(r["cpu_s"] for r in a), sum(r["cpu_s"] for r in b)
-        lines.append(f"| {key[0]} | {key[1]} | cpu s per realization | {ca / len(a):.2f} | "
+        what = "wall s (of campaign simulate)" if whole else "cpu s"
+        lines.append(f"| {key[0]} | {key[1]} | {what} per realization | {ca / len(a):.2f} | "
                      f"{cb / len(b):.2f} | {len(a)} / {len(b)} | new/old {cb / ca * len(a) / len(b):.2f} |")
     return lines, worst, bad
 

@@ -12,6 +12,13 @@
    proportions = 0.4 / sqrt(0.3 * 0.7 * (1/20 + 1/20)) = +2.76; one of the new build's two
    realizations arrested (an outcome of the protocol, not a problem): 0 of 2 against 1 of 2,
    z = 0.5 / sqrt(0.25 * 0.75 * 1) = +1.15; exit 0.
+6. Whole realizations (`campaign simulate --json` files, issue 41), old seeds 1-2 and new seeds
+   5, 7: old survival times 1, 2, 3 + 4 censored (3 jams in 10 s) twice, new 2, 4 + 4 censored
+   (2 jams in 10 s), one new window arrested (1 + 9 uncensored: 2 jams): tau 20/6 = 3.333
+   against 20/4 = 5.000, z = ln(1.5) / sqrt(1/6 + 1/4) = +0.63; rates 100, 110 against 120,
+   130: z = 20 / hypot(5, 5) = +2.83; a stopped window (time_limit) and an arrest are outcomes,
+   the seeds differ and that is allowed: exit 0. A file that is not such an output: exit 1,
+   named.
 """
 import json
 import math
@@ -105,6 +112,43 @@ check(got is not None and abs(got - 0.5 / math.sqrt(0.1875)) < 0.01,
       "arrested realizations: z %s (by hand %.2f)" % (got, 0.5 / math.sqrt(0.1875)))
 check("2.250" in out and "1.100" in out, "shakes per jam 1.100 and 2.250")
 check(rc == 0 and "arrested" not in err, "an arrested realization is counted, not a problem (rc %d)" % rc)
+
+# 6. whole realizations
+def realization(seed, survival, censored, rate, status="time_limit", shakes=None):
+    return {"status": status, "D_cm": 2.7, "theta_deg": 45, "seed": seed, "survival_times": survival,
+            "censored": censored, "discharge_rate": rate, "n_jams": sum(not c for c in censored),
+            "n_shakes": shakes if shakes is not None else sum(not c for c in censored),
+            "n_jams_multi_shake": 0, "wall_seconds": 100.0}
+
+
+def run_dirs(old, new):
+    with tempfile.TemporaryDirectory() as d:
+        paths = []
+        for name, docs in (("old", old), ("new", new)):
+            p = os.path.join(d, name)
+            os.mkdir(p)
+            for doc in docs:
+                with open(os.path.join(p, "r-%s.json" % doc.get("seed", "x")), "w") as f:
+                    json.dump(doc, f)
+            paths.append(p)
+        r = subprocess.run([sys.executable, tool] + paths, capture_output=True, text=True)
+        return r.returncode, r.stdout, r.stderr
+
+
+old = [realization(s, [1.0, 2.0, 3.0, 4.0], [False, False, False, True], 100.0 + 10 * (s - 1)) for s in (1, 2)]
+new = [realization(5, [2.0, 4.0, 4.0], [False, False, True], 120.0),
+       realization(7, [1.0, 9.0], [False, False], 130.0, status="arrested", shakes=11)]
+rc, out, err = run_dirs(old, new)
+want = math.log(1.5) / math.sqrt(1 / 6 + 1 / 4)
+got = z_in(out, "tau (s)")
+check(got is not None and abs(got - want) < 0.01, "realizations: tau z %s (by hand %.2f)" % (got, want))
+got = z_in(out, "rate")
+check(got is not None and abs(got - 20 / math.hypot(5, 5)) < 0.01,
+      "realizations: rate z %s (by hand %.2f)" % (got, 20 / math.hypot(5, 5)))
+check("3.333" in out and "5.000" in out and "| 1-2 | 5, 7 |" in out, "realizations: tau values and seed sets")
+check(rc == 0 and not err, "realizations: time_limit, arrest and other seeds accepted (rc %d, %s)" % (rc, err.strip()))
+rc, out, err = run_dirs(old, [{"seed": 3, "status": "complete"}])
+check(rc != 0 and "not a campaign simulate --json output" in err, "realizations: a wrong file named (rc %d)" % rc)
 
 print("%d failed" % fails)
 sys.exit(1 if fails else 0)
