@@ -133,10 +133,10 @@ def compare(old, new):
                          f"{len(a)} / {len(b)} | |")
         elif sa != sb:
             bad.append(f"{key[0]} {key[1]}: the two builds ran different seeds")
-        jamming = key[0] == "jamming" or whole
+        jams_scene = key[0] == "jamming" or whole
         # arrested: an outcome of the jamming scene's protocol, counted below, not a problem;
         # time_limit: a realization stopped at protocol.max_time_s, its last survival censored
-        ok = ("complete", "settled") + (("arrested",) if jamming else ()) + (("time_limit",) if whole else ())
+        ok = ("complete", "settled") + (("arrested",) if jams_scene else ()) + (("time_limit",) if whole else ())
         for side, rows in (("old", a), ("new", b)):
             for r in rows:
                 if r["status"] not in ok:
@@ -156,7 +156,7 @@ def compare(old, new):
             lines.append(f"| {key[0]} | {key[1]} | {name} | {fmt(ma, ea, digits)} | "
                          f"{fmt(mb, eb, digits)} | {na} / {nb} | {z:+.2f} |")
         ja, jb = sum(r["jams"] for r in a), sum(r["jams"] for r in b)
-        if jamming and all(r["status"] in ok for r in a + b):
+        if jams_scene and all(r["status"] in ok for r in a + b):
             fa, fb = sum(r["flow_time"] for r in a), sum(r["flow_time"] for r in b)
             if ja and jb:
                 ta, tb = fa / ja, fb / jb
@@ -165,7 +165,7 @@ def compare(old, new):
                 lines.append(f"| {key[0]} | {key[1]} | tau (s) | {ta:.3f} +- {ta / math.sqrt(ja):.3f} "
                              f"({ja} jams) | {tb:.3f} +- {tb / math.sqrt(jb):.3f} ({jb} jams) | "
                              f"{len(a)} / {len(b)} | {z:+.2f} |")
-        if jamming and all("shakes" in r for r in a + b):
+        if jams_scene and all("shakes" in r for r in a + b):
             sha, shb = sum(r["shakes"] for r in a), sum(r["shakes"] for r in b)
             if ja and jb:
                 ratio = f"new/old {shb / sha * ja / jb:.2f}" if sha else "-"

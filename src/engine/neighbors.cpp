@@ -166,18 +166,20 @@ void System::permute_by_cell(double cutoff) {
 
 namespace {
 
-// Appends to `list` (the first `count` entries in use, the rest room) every candidate j of
-// [lo, hi) with within(j), in order. Each candidate is written and kept, the count advanced,
+// Appends to `list` (the first `count` entries in use, the rest room) item(k) for every k of
+// [lo, hi) with within(item(k)), in order. Each item is written and kept, the count advanced,
 // only when it is within: no branch on the data, whose outcome the CPU cannot predict (about
 // a third of the candidates of the half stencil are kept). The same list as a push_back per hit.
-template <class Within>
-void append_within(std::vector<int>& list, std::size_t& count, int lo, int hi, Within within) {
+template <class Item, class Within>
+void append_within(std::vector<int>& list, std::size_t& count, int lo, int hi, Item item,
+                   Within within) {
     if (hi <= lo) return;
     if (count + std::size_t(hi - lo) > list.size())
         list.resize(std::max(2 * list.size(), count + std::size_t(hi - lo)));
     int* const out = list.data();
     std::size_t c = count;
-    for (int j = lo; j < hi; ++j) {
+    for (int k = lo; k < hi; ++k) {
+        const int j = item(k);
         out[c] = j;
         c += within(j) ? 1 : 0;
     }
@@ -207,19 +209,18 @@ void System::build_pairs() {
             const double cut = ri + r_[j] + skin;
             return dx * dx + dy * dy < cut * cut;
         };
-        append_within(pj_, np, int(i) + 1, cell_start_[c + 1], within);
+        const auto same = [](int j) { return j; };  // particles are listed by index
+        append_within(pj_, np, int(i) + 1, cell_start_[c + 1], same, within);
         for (int s = 0; s < 4; ++s) {
             const int nx = cx + sx[s], ny = cy + sy[s];
             if (nx < 0 || nx >= grid_nx_ || ny >= grid_ny_) continue;
             const int nc = nx + ny * grid_nx_;
-            append_within(pj_, np, cell_start_[nc], cell_start_[nc + 1], within);
+            append_within(pj_, np, cell_start_[nc], cell_start_[nc + 1], same, within);
         }
     }
     pstart_[n] = int(np);
     pj_.resize(np);
-    // Mobile-wall pairs from the wall grid (in the walls' base frame). The wall grid lists
-    // indices into the wall columns; they are appended by position in the grid (k) and then
-    // mapped to wall indices.
+    // Mobile-wall pairs from the wall grid (in the walls' base frame).
     const double ox = wall_offset_.x(), oy = wall_offset_.y();
     for (std::size_t i = 0; i < n; ++i) {
         wstart_[i] = int(nw);
@@ -227,23 +228,20 @@ void System::build_pairs() {
         const double qx = x_[i] - ox, qy = y_[i] - oy, ri = r_[i];
         const int cx = std::clamp(int(std::floor((qx - wgrid_x0_) / wcell_size_)), -1, wgrid_nx_);
         const int cy = std::clamp(int(std::floor((qy - wgrid_y0_) / wcell_size_)), -1, wgrid_ny_);
-        const auto within = [&](int k) {
-            const int j = wcell_items_[k];
+        const auto wall = [&](int k) { return wcell_items_[k]; };
+        const auto within = [&](int j) {
             const double dx = qx - wx_[j], dy = qy - wy_[j];
             const double cut = ri + wr_[j] + skin;
             return dx * dx + dy * dy < cut * cut;
         };
-        const std::size_t first = nw;
         for (int ny = cy - 1; ny <= cy + 1; ++ny) {
             if (ny < 0 || ny >= wgrid_ny_) continue;
             for (int nx = cx - 1; nx <= cx + 1; ++nx) {
                 if (nx < 0 || nx >= wgrid_nx_) continue;
                 const int nc = nx + ny * wgrid_nx_;
-                append_within(wj_, nw, wcell_start_[nc], wcell_start_[nc + 1], within);
+                append_within(wj_, nw, wcell_start_[nc], wcell_start_[nc + 1], wall, within);
             }
         }
-        for (std::size_t k = first; k < nw; ++k)
-            wj_[k] = wcell_items_[wj_[k]];
     }
     wstart_[n] = int(nw);
     wj_.resize(nw);

@@ -166,7 +166,7 @@ struct IntegratorParams {
     // The settle's own delta (protocol step 2; issue 41): 0, the default, settles at
     // steps_per_collision. The step returns to dt = tau_c / steps_per_collision at the opening.
     double settle_steps_per_collision = 0.0;
-    double skin = 0.4;                  // Verlet skin, in units of d_small (bench_engine)
+    double skin = 0.4;  // Verlet skin, in units of d_small (bench_engine)
     // The contact corrections of bench/results/ACCURACY.md (SystemConfig::contact_corrections):
     // smaller collision biases at a given delta, the same model.
     bool contact_corrections = true;
@@ -250,9 +250,9 @@ struct DerivedConstants {
     // particles' and the walls' e_n (hertz_damping_alpha).
     double hertz_k = 0.0;  // N/m^2
     double hertz_alpha_system = 0.0, hertz_alpha_wall = 0.0;
-    double dt;       // s, tau_c / delta
+    double dt;         // s, tau_c / delta
     double settle_dt;  // s, the settle's: tau_c / integrator.settle_steps_per_collision, or dt
-    double t_check;  // s
+    double t_check;    // s
 };
 
 DerivedConstants derive_constants(const SceneParams& p);
