@@ -21,7 +21,9 @@ builds and z = (new - old) / sqrt(se_old^2 + se_new^2):
   shakes      (jamming scene, when the lines have them) shakes per jam, and the share of jams
               that needed more than one shake (z of two proportions over the jams); arrested
               realizations (a jam that max_shakes did not clear: a status of the protocol, counted
-              here, z of two proportions over the realizations)
+              here, z of two proportions over the realizations); arrests per jam, their ratio
+              new/old and its exact 95 % interval (conditional on the arrests of both sides,
+              Clopper-Pearson: rare events, so what matters is which ratios the counts allow)
   cpu         CPU seconds per realization (cost, not a statistic to agree: ratio new/old); for
               whole realizations the wall seconds they report
   settle      simulated seconds to rest and CPU seconds of fill and settle (when the lines have
@@ -113,6 +115,38 @@ def two_proportions(ka, na, kb, nb):
     return (kb / nb - ka / na) / s if s > 0 else float("nan")
 
 
+def binomial_cdf(x, n, p):
+    """P(X <= x) for X ~ Binomial(n, p)."""
+    return sum(math.comb(n, i) * p**i * (1 - p) ** (n - i) for i in range(x + 1))
+
+
+def clopper_pearson(x, n, alpha=0.05):
+    """The exact (Clopper-Pearson) two-sided 1 - alpha interval of a proportion x of n."""
+    def solve(f, target):  # the p in (0, 1) where the decreasing f(p) equals target, by bisection
+        lo, hi = 0.0, 1.0
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if f(mid) > target else (lo, mid)
+        return 0.5 * (lo + hi)
+    # lower: P(X >= x) = alpha/2; upper: P(X <= x) = alpha/2
+    lower = 0.0 if x == 0 else solve(lambda p: binomial_cdf(x - 1, n, p), 1 - alpha / 2)
+    upper = 1.0 if x == n else solve(lambda p: binomial_cdf(x, n, p), alpha / 2)
+    return lower, upper
+
+
+def rate_ratio(ka, na, kb, nb, alpha=0.05):
+    """The ratio (kb/nb) / (ka/na) of two rare-event rates and its exact conditional 1 - alpha
+    interval: given k = ka + kb events, kb ~ Binomial(k, pi) with pi = R nb / (na + R nb), so
+    the Clopper-Pearson interval of pi gives R's (the Poisson approximation of a small
+    proportion). None without events."""
+    k = ka + kb
+    if k == 0:
+        return None
+    lo, hi = clopper_pearson(kb, k, alpha)
+    r = lambda p: math.inf if p >= 1 else p * na / ((1 - p) * nb)
+    return (kb / nb) / (ka / na) if ka else math.inf, r(lo), r(hi)
+
+
 def fmt(m, se, digits):
     return f"{m:.{digits}f} +- {se:.{digits}f}"
 
@@ -182,6 +216,14 @@ def compare(old, new):
                         worst = max(worst, abs(z))
                     lines.append(f"| {key[0]} | {key[1]} | {label} | {ka} of {na_} | {kb} of {nb_} | "
                                  f"{len(a)} / {len(b)} | {z:+.2f} |")
+                # Arrests per jam: rare events, so the question is what ratio the counts allow
+                # (issue 41: is a doubling ruled out?), not only whether they differ.
+                ka = sum(r["status"] == "arrested" for r in a)
+                kb = sum(r["status"] == "arrested" for r in b)
+                rr = rate_ratio(ka, ja, kb, jb)
+                text = "-" if rr is None else f"new/old {rr[0]:.2f} (95 % {rr[1]:.3g}-{rr[2]:.3g})"
+                lines.append(f"| {key[0]} | {key[1]} | arrests per jam | {ka} of {ja} | {kb} of {jb} | "
+                             f"{len(a)} / {len(b)} | {text} |")
         if all("settle_cpu_s" in r for r in a + b):
             for name, label in (("settle_time", "settle time (simulated s)"),
                                 ("settle_cpu_s", "settle cpu s per realization")):

@@ -19,6 +19,13 @@
    130: z = 20 / hypot(5, 5) = +2.83; a stopped window (time_limit) and an arrest are outcomes,
    the seeds differ and that is allowed: exit 0. A file that is not such an output: exit 1,
    named.
+   Arrests per jam, with the exact conditional 95 % interval of their ratio new/old: given the
+   k arrests of both sides, the new side's count is Binomial(k, pi), pi = R n_new / (n_old +
+   R n_new). Case 6: 0 of 6 jams against 1 of 4: k = 1, pi's Clopper-Pearson interval is
+   [0.025, 1] (P(X >= 1) = pi), so R lies in [0.025 / 0.975 * 6 / 4 = 0.0385, inf].
+7. One arrest of 2 jams on each side: ratio 1.00; k = 2, x = 1: 1 - (1 - pi)^2 = 0.025 and
+   pi^2 = 0.975 give pi in [1 - sqrt(0.975), sqrt(0.975)] = [0.01258, 0.98742], R in
+   [0.01274, 78.5].
 """
 import json
 import math
@@ -147,8 +154,17 @@ check(got is not None and abs(got - 20 / math.hypot(5, 5)) < 0.01,
       "realizations: rate z %s (by hand %.2f)" % (got, 20 / math.hypot(5, 5)))
 check("3.333" in out and "5.000" in out and "| 1-2 | 5, 7 |" in out, "realizations: tau values and seed sets")
 check(rc == 0 and not err, "realizations: time_limit, arrest and other seeds accepted (rc %d, %s)" % (rc, err.strip()))
+check("| arrests per jam | 0 of 6 | 1 of 4 | 2 / 2 | new/old inf (95 % 0.0385-inf) |" in out,
+      "realizations: arrests per jam and the interval of their ratio")
 rc, out, err = run_dirs(old, [{"seed": 3, "status": "complete"}])
 check(rc != 0 and "not a campaign simulate --json output" in err, "realizations: a wrong file named (rc %d)" % rc)
+
+# 7. one arrest of two jams on each side
+one = [realization(9, [1.0, 2.0], [False, False], 100.0, status="arrested", shakes=11)]
+rc, out, err = run_dirs(one, [dict(one[0], seed=10)])
+lo = (1 - math.sqrt(0.975)) / math.sqrt(0.975)
+check("| arrests per jam | 1 of 2 | 1 of 2 | 1 / 1 | new/old 1.00 (95 %% %.3g-%.3g) |" % (lo, 1 / lo) in out,
+      "one arrest each: ratio 1.00, interval [%.4f, %.1f] by hand" % (lo, 1 / lo))
 
 print("%d failed" % fails)
 sys.exit(1 if fails else 0)
