@@ -39,6 +39,8 @@ import math
 import os
 import sys
 
+from scipy.stats import beta
+
 
 def realization_row(path):
     """One `campaign simulate --json` output as a line of the comparison."""
@@ -115,22 +117,11 @@ def two_proportions(ka, na, kb, nb):
     return (kb / nb - ka / na) / s if s > 0 else float("nan")
 
 
-def binomial_cdf(x, n, p):
-    """P(X <= x) for X ~ Binomial(n, p)."""
-    return sum(math.comb(n, i) * p**i * (1 - p) ** (n - i) for i in range(x + 1))
-
-
 def clopper_pearson(x, n, alpha=0.05):
-    """The exact (Clopper-Pearson) two-sided 1 - alpha interval of a proportion x of n."""
-    def solve(f, target):  # the p in (0, 1) where the decreasing f(p) equals target, by bisection
-        lo, hi = 0.0, 1.0
-        for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if f(mid) > target else (lo, mid)
-        return 0.5 * (lo + hi)
-    # lower: P(X >= x) = alpha/2; upper: P(X <= x) = alpha/2
-    lower = 0.0 if x == 0 else solve(lambda p: binomial_cdf(x - 1, n, p), 1 - alpha / 2)
-    upper = 1.0 if x == n else solve(lambda p: binomial_cdf(x, n, p), alpha / 2)
+    """The exact (Clopper-Pearson) two-sided 1 - alpha interval of a proportion x of n, from
+    the beta quantiles."""
+    lower = 0.0 if x == 0 else float(beta.ppf(alpha / 2, x, n - x + 1))
+    upper = 1.0 if x == n else float(beta.ppf(1 - alpha / 2, x + 1, n - x))
     return lower, upper
 
 
@@ -205,12 +196,12 @@ def compare(old, new):
                 ratio = f"new/old {shb / sha * ja / jb:.2f}" if sha else "-"
                 lines.append(f"| {key[0]} | {key[1]} | shakes per jam | {sha / ja:.3f} | "
                              f"{shb / jb:.3f} | {len(a)} / {len(b)} | {ratio} |")
+                arr_a = sum(r["status"] == "arrested" for r in a)
+                arr_b = sum(r["status"] == "arrested" for r in b)
                 for label, ka, kb, na_, nb_ in (
                         ("jams needing more than one shake",
                          sum(r["multi_shake"] for r in a), sum(r["multi_shake"] for r in b), ja, jb),
-                        ("arrested realizations",
-                         sum(r["status"] == "arrested" for r in a),
-                         sum(r["status"] == "arrested" for r in b), len(a), len(b))):
+                        ("arrested realizations", arr_a, arr_b, len(a), len(b))):
                     z = two_proportions(ka, na_, kb, nb_)
                     if not math.isnan(z):
                         worst = max(worst, abs(z))
@@ -218,11 +209,9 @@ def compare(old, new):
                                  f"{len(a)} / {len(b)} | {z:+.2f} |")
                 # Arrests per jam: rare events, so the question is what ratio the counts allow
                 # (issue 41: is a doubling ruled out?), not only whether they differ.
-                ka = sum(r["status"] == "arrested" for r in a)
-                kb = sum(r["status"] == "arrested" for r in b)
-                rr = rate_ratio(ka, ja, kb, jb)
+                rr = rate_ratio(arr_a, ja, arr_b, jb)
                 text = "-" if rr is None else f"new/old {rr[0]:.2f} (95 % {rr[1]:.3g}-{rr[2]:.3g})"
-                lines.append(f"| {key[0]} | {key[1]} | arrests per jam | {ka} of {ja} | {kb} of {jb} | "
+                lines.append(f"| {key[0]} | {key[1]} | arrests per jam | {arr_a} of {ja} | {arr_b} of {jb} | "
                              f"{len(a)} / {len(b)} | {text} |")
         if all("settle_cpu_s" in r for r in a + b):
             for name, label in (("settle_time", "settle time (simulated s)"),

@@ -4,7 +4,8 @@
     jams_by_onset.py "OLD_GLOB" "NEW_GLOB" [CUT]
 
 For each side (`campaign simulate --json` files): windows, jams at the opening and later, the
-shakes each needed (10 = not cleared: the window arrested) and the arrests in each group.
+shakes each needed (max_shakes, 10, also when the last of them cleared the jam) and the arrests
+in each group (the jam that ended its window arrested).
 Issue 41 asks whether corrected Verlet at delta 25 arrests more often than gear4 at 50; the
 arrests of the first windows came at the opening more often with the former.
 """
